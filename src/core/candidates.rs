@@ -1,0 +1,348 @@
+//! The whole method (method.md §7): one noise-free and a few noisy Snake runs, a lattice with
+//! every origin shift on each, assignment and refinement, metrics, TOPSIS ranking. Candidates are
+//! independent and computed in parallel; the result does not depend on the order of the input
+//! regions, because everything works on the regions sorted by id.
+
+use super::frame::Frame;
+use super::grid::{self, Lattice};
+use super::metrics::{self, Scored};
+use super::network::{self, Network};
+use super::outline::{self, Prepared};
+use super::snake::{self, SnakeRun};
+use super::{
+    assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params,
+    Progress, Region, RegionCell, RegionMetrics,
+};
+use geo::{Area, Coord, CoordsIter, MultiPolygon};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+use std::collections::HashSet;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Draws of a noisy centroid before it is left where it was (a draw must land inside the outline).
+const NOISE_DRAWS: usize = 16;
+
+/// See [`crate::generate`].
+pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Result<GridMap, Error> {
+    params.validate().map_err(Error::InvalidParameter)?;
+    validate(regions)?;
+    let mut order: Vec<usize> = (0..regions.len()).collect();
+    order.sort_by(|&a, &b| regions[a].id.cmp(&regions[b].id));
+    let sorted: Vec<&MultiPolygon<f64>> = order.iter().map(|&i| &regions[i].geometry).collect();
+    let frame = Frame::of(&sorted)
+        .ok_or_else(|| Error::input(None, "the regions have no area"))?;
+    let unit: Vec<MultiPolygon<f64>> = sorted.iter().map(|g| frame.polygons_to_unit(g)).collect();
+    let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
+
+    let prepared = outline::prepare(&unit_refs, params);
+    let base = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
+
+    let mut levels = vec![0.0];
+    levels.extend(params.noise_levels.iter().copied().filter(|&md| md > 0.0));
+    let tracker = Tracker::new(progress, levels.len() * (params.max_steps + params.shifts.len()));
+    let runs = levels
+        .par_iter()
+        .enumerate()
+        .map(|(k, &md)| {
+            let network = if md == 0.0 {
+                base.clone()
+            } else {
+                let centroids = noisy_centroids(&prepared, &base, md, seed(params.seed, 1, k));
+                network::build(&centroids, &prepared.rings, &prepared.adjacency)?
+            };
+            let neighbours = forces::neighbours(&network, &prepared.adjacency);
+            let run = snake::run(&network, &neighbours, params, &|| tracker.advance(1))?;
+            // Runs that stop early hand their unused steps to the progress count.
+            tracker.advance(params.max_steps - run.report.steps.min(params.max_steps));
+            Ok((md, network, run))
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+
+    let context = Context {
+        prepared: &prepared,
+        frame,
+        union_map: frame.polygons_to_map(&prepared.union),
+        params,
+    };
+    let jobs: Vec<(usize, [f64; 2])> = (0..runs.len())
+        .flat_map(|r| params.shifts.iter().map(move |&s| (r, s)))
+        .collect();
+    let layouts = jobs
+        .par_iter()
+        .enumerate()
+        .map(|(k, &(r, shift))| {
+            if tracker.cancelled() {
+                return Err(Error::Cancelled);
+            }
+            let (_, network, run) = &runs[r];
+            let layout = context.layout(network, run, shift, seed(params.seed, 2, k))?;
+            if !tracker.advance(1) {
+                return Err(Error::Cancelled);
+            }
+            Ok(layout)
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+
+    let scores = rank::topsis(
+        &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
+        params.topsis_weights,
+    );
+    let mut ranking: Vec<usize> = (0..layouts.len()).collect();
+    ranking.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
+    let candidates = ranking
+        .iter()
+        .map(|&k| {
+            let (md, _, run) = &runs[jobs[k].0];
+            CandidateReport {
+                noise: *md,
+                shift: jobs[k].1,
+                metrics: layouts[k].metrics,
+                score: scores[k],
+                snake: run.report.clone(),
+            }
+        })
+        .collect();
+    let best = &layouts[ranking[0]];
+    let (_, _, run) = &runs[jobs[ranking[0]].0];
+    Ok(context.grid_map(regions, &order, best, run, candidates))
+}
+
+/// Refuses what the method cannot work with, naming the feature.
+fn validate(regions: &[Region]) -> Result<(), Error> {
+    if regions.is_empty() {
+        return Err(Error::input(None, "the layer has no regions"));
+    }
+    let mut seen = HashSet::new();
+    for region in regions {
+        let id = region.id.as_str();
+        if id.is_empty() {
+            return Err(Error::input(None, "a region has an empty id"));
+        }
+        if !seen.insert(id) {
+            return Err(Error::input(Some(id), "the id is used by more than one region"));
+        }
+        if region.geometry.0.is_empty() {
+            return Err(Error::input(Some(id), "the geometry is empty"));
+        }
+        if region.geometry.coords_iter().any(|c| !c.x.is_finite() || !c.y.is_finite()) {
+            return Err(Error::input(Some(id), "the geometry has a NaN or infinite coordinate"));
+        }
+        // Written so that a NaN area is refused too.
+        if region.geometry.unsigned_area().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return Err(Error::input(Some(id), "the polygon has no area"));
+        }
+    }
+    Ok(())
+}
+
+/// A seed for the `k`-th draw of purpose `purpose`, so every random choice is reproducible and
+/// independent of the thread that makes it.
+fn seed(base: u64, purpose: u64, k: usize) -> u64 {
+    base ^ purpose.wrapping_mul(0xD1B5_4A32_D192_ED03) ^ (k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+}
+
+/// Strategy 1 of §7: Gaussian noise on the centroids, σ_i = md × the mean distance from centroid
+/// i to its neighbours, redrawn while it falls outside the outline.
+fn noisy_centroids(prepared: &Prepared, base: &Network, md: f64, seed: u64) -> Vec<Coord<f64>> {
+    let neighbours = forces::neighbours(base, &prepared.adjacency);
+    let inside = super::geometry::RingIndex::new(&outline::coords_of(&prepared.rings));
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    prepared
+        .centroids
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| {
+            let distances: Vec<f64> = neighbours[i]
+                .iter()
+                .map(|&j| {
+                    let d = c - prepared.centroids[j];
+                    (d.x * d.x + d.y * d.y).sqrt()
+                })
+                .collect();
+            let sigma = md * distances.iter().sum::<f64>() / distances.len().max(1) as f64;
+            let Ok(normal) = Normal::new(0.0, sigma) else {
+                return c;
+            };
+            (0..NOISE_DRAWS)
+                .map(|_| c + Coord { x: normal.sample(&mut rng), y: normal.sample(&mut rng) })
+                .find(|&p| inside.contains(p))
+                .unwrap_or(c)
+        })
+        .collect()
+}
+
+/// Progress over the work units of a run (Snake steps and candidate layouts), shared by the
+/// worker threads; remembers a cancellation.
+struct Tracker<'a> {
+    progress: Progress<'a>,
+    total: usize,
+    done: AtomicUsize,
+    stopped: AtomicBool,
+}
+
+impl<'a> Tracker<'a> {
+    fn new(progress: Progress<'a>, total: usize) -> Self {
+        Tracker {
+            progress,
+            total: total.max(1),
+            done: AtomicUsize::new(0),
+            stopped: AtomicBool::new(false),
+        }
+    }
+
+    /// Counts `units` more as done and reports; false once the caller has cancelled.
+    fn advance(&self, units: usize) -> bool {
+        if self.cancelled() {
+            return false;
+        }
+        let done = self.done.fetch_add(units, Ordering::Relaxed) + units;
+        let fraction = (done as f64 / self.total as f64).min(1.0);
+        if !(self.progress)(fraction, "snakegrid") {
+            self.stopped.store(true, Ordering::Relaxed);
+            return false;
+        }
+        true
+    }
+
+    fn cancelled(&self) -> bool {
+        self.stopped.load(Ordering::Relaxed)
+    }
+}
+
+/// One candidate layout, in the sorted region order.
+struct Layout {
+    lattice: Lattice,
+    /// Per region, an index into `lattice.cells`.
+    cells: Vec<usize>,
+    metrics: LayoutMetrics,
+    region_metrics: Vec<RegionMetrics>,
+    moved_outline: MultiPolygon<f64>,
+}
+
+/// What every candidate shares.
+struct Context<'a> {
+    prepared: &'a Prepared,
+    frame: Frame,
+    /// The regions' union in map units, for the shape metric.
+    union_map: MultiPolygon<f64>,
+    params: &'a Params,
+}
+
+impl Context<'_> {
+    /// Lattice, assignment, refinement and metrics for one Snake run and one origin shift (§6).
+    fn layout(&self, network: &Network, run: &SnakeRun, shift: [f64; 2], seed: u64) -> Result<Layout, Error> {
+        let m = network.centroids;
+        let moved = &run.positions[..m];
+        let moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
+        let lattice = grid::fit(&moved_outline, m, shift);
+        if lattice.cells.len() < m {
+            return Err(Error::Internal(format!(
+                "the lattice has {} cells for {m} regions",
+                lattice.cells.len()
+            )));
+        }
+        let centres: Vec<Coord<f64>> = lattice.cells[..m]
+            .iter()
+            .map(|c| lattice.centre(c.col, c.row))
+            .collect();
+        let mut cells = assign::assign(moved, &centres);
+        if self.params.refine {
+            let layout = refine::Layout {
+                adjacency: &self.prepared.adjacency,
+                centroids: &self.prepared.centroids,
+                moved,
+                lattice: &lattice,
+            };
+            cells = refine::refine(&layout, &cells, self.params, seed);
+        }
+        let (metrics, region_metrics) = self.evaluate(&lattice, &cells, moved);
+        Ok(Layout {
+            lattice,
+            cells,
+            metrics,
+            region_metrics,
+            moved_outline,
+        })
+    }
+
+    /// The §8 metrics, in map units.
+    fn evaluate(&self, lattice: &Lattice, cells: &[usize], moved: &[Coord<f64>]) -> (LayoutMetrics, Vec<RegionMetrics>) {
+        let f = &self.frame;
+        let centroids: Vec<Coord<f64>> = self.prepared.centroids.iter().map(|&c| f.to_map(c)).collect();
+        let moved: Vec<Coord<f64>> = moved.iter().map(|&c| f.to_map(c)).collect();
+        let col_rows: Vec<(i32, i32)> = cells
+            .iter()
+            .map(|&k| (lattice.cells[k].col, lattice.cells[k].row))
+            .collect();
+        let centres: Vec<Coord<f64>> = col_rows
+            .iter()
+            .map(|&(c, r)| f.to_map(lattice.centre(c, r)))
+            .collect();
+        metrics::evaluate(&Scored {
+            centroids: &centroids,
+            moved: &moved,
+            cells: &col_rows,
+            centres: &centres,
+            cell_size: lattice.cell_size * f.scale,
+            unit: f.scale,
+            adjacency: &self.prepared.adjacency,
+            outline: &self.union_map,
+        })
+    }
+
+    /// The chosen layout in the input order and in map units, columns and rows counted from the
+    /// top-left used cell.
+    fn grid_map(
+        &self,
+        regions: &[Region],
+        order: &[usize],
+        best: &Layout,
+        run: &SnakeRun,
+        candidates: Vec<CandidateReport>,
+    ) -> GridMap {
+        let f = &self.frame;
+        let lattice = &best.lattice;
+        let used: Vec<(i32, i32)> = best
+            .cells
+            .iter()
+            .map(|&k| (lattice.cells[k].col, lattice.cells[k].row))
+            .collect();
+        let col0 = used.iter().map(|c| c.0).min().unwrap_or(0);
+        let row0 = used.iter().map(|c| c.1).min().unwrap_or(0);
+        let mut cells: Vec<Option<RegionCell>> = vec![None; regions.len()];
+        for (k, &input) in order.iter().enumerate() {
+            let (col, row) = used[k];
+            let square = lattice.square(col, row);
+            cells[input] = Some(RegionCell {
+                id: regions[input].id.clone(),
+                col: col - col0,
+                row: row - row0,
+                cell: geo::MapCoords::map_coords(&square, |c| f.to_map(c)),
+                centroid: f.to_map(self.prepared.centroids[k]),
+                moved_centroid: f.to_map(run.positions[k]),
+                metrics: best.region_metrics[k],
+            });
+        }
+        let mut adjacency: Vec<(usize, usize)> = self
+            .prepared
+            .adjacency
+            .iter()
+            .map(|&(i, j)| {
+                let (a, b) = (order[i], order[j]);
+                (a.min(b), a.max(b))
+            })
+            .collect();
+        adjacency.sort_unstable();
+        GridMap {
+            cells: cells.into_iter().flatten().collect(),
+            cell_size: lattice.cell_size * f.scale,
+            metrics: best.metrics,
+            snake: run.report.clone(),
+            candidates,
+            moved_outline: f.polygons_to_map(&best.moved_outline),
+            adjacency,
+        }
+    }
+}

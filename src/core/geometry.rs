@@ -1,0 +1,201 @@
+//! Planar helpers the steps share: a spatial index over the segments of a set of closed rings,
+//! answering "is this point inside?", "how far is the nearest segment?" and "does any segment
+//! cross another?" in logarithmic time. The Snake asks these of a moving outline every step, so
+//! they work on plain coordinate rings rather than on geo polygons.
+
+use geo::Coord;
+use rstar::{PointDistance, RTree, RTreeObject, AABB};
+
+/// Closed rings given as open coordinate chains (the last vertex joins the first).
+pub type Rings = [Vec<Coord<f64>>];
+
+/// One ring segment: from vertex `index` of ring `ring` to the next vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct Segment {
+    pub a: Coord<f64>,
+    pub b: Coord<f64>,
+    pub ring: usize,
+    pub index: usize,
+}
+
+impl RTreeObject for Segment {
+    type Envelope = AABB<[f64; 2]>;
+    fn envelope(&self) -> Self::Envelope {
+        AABB::from_corners([self.a.x, self.a.y], [self.b.x, self.b.y])
+    }
+}
+
+impl PointDistance for Segment {
+    fn distance_2(&self, p: &[f64; 2]) -> f64 {
+        point_segment_distance2(Coord { x: p[0], y: p[1] }, self.a, self.b)
+    }
+}
+
+/// Squared distance from `p` to the segment `a`–`b`.
+pub fn point_segment_distance2(p: Coord<f64>, a: Coord<f64>, b: Coord<f64>) -> f64 {
+    let ab = b - a;
+    let len2 = ab.x * ab.x + ab.y * ab.y;
+    let t = if len2 > 0.0 {
+        (((p - a).x * ab.x + (p - a).y * ab.y) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let d = p - (a + ab * t);
+    d.x * d.x + d.y * d.y
+}
+
+/// The point of segment `a`–`b` nearest to `p`.
+pub fn nearest_on_segment(p: Coord<f64>, a: Coord<f64>, b: Coord<f64>) -> Coord<f64> {
+    let ab = b - a;
+    let len2 = ab.x * ab.x + ab.y * ab.y;
+    if len2 == 0.0 {
+        return a;
+    }
+    let t = (((p - a).x * ab.x + (p - a).y * ab.y) / len2).clamp(0.0, 1.0);
+    a + ab * t
+}
+
+fn cross(o: Coord<f64>, a: Coord<f64>, b: Coord<f64>) -> f64 {
+    (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x)
+}
+
+/// Whether the closed segments `p1`–`p2` and `q1`–`q2` share any point (touching counts).
+pub fn segments_intersect(p1: Coord<f64>, p2: Coord<f64>, q1: Coord<f64>, q2: Coord<f64>) -> bool {
+    let d1 = cross(q1, q2, p1);
+    let d2 = cross(q1, q2, p2);
+    let d3 = cross(p1, p2, q1);
+    let d4 = cross(p1, p2, q2);
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    let on = |o: Coord<f64>, a: Coord<f64>, p: Coord<f64>, d: f64| {
+        d == 0.0 && p.x >= o.x.min(a.x) && p.x <= o.x.max(a.x) && p.y >= o.y.min(a.y) && p.y <= o.y.max(a.y)
+    };
+    on(q1, q2, p1, d1) || on(q1, q2, p2, d2) || on(p1, p2, q1, d3) || on(p1, p2, q2, d4)
+}
+
+/// A segment index over closed rings.
+pub struct RingIndex {
+    tree: RTree<Segment>,
+    ring_lengths: Vec<usize>,
+}
+
+impl RingIndex {
+    pub fn new(rings: &Rings) -> RingIndex {
+        let segments = rings
+            .iter()
+            .enumerate()
+            .flat_map(|(r, ring)| {
+                (0..ring.len()).map(move |i| Segment {
+                    a: ring[i],
+                    b: ring[(i + 1) % ring.len()],
+                    ring: r,
+                    index: i,
+                })
+            })
+            .collect();
+        RingIndex {
+            tree: RTree::bulk_load(segments),
+            ring_lengths: rings.iter().map(Vec::len).collect(),
+        }
+    }
+
+    /// Even-odd containment: inside the outer rings and outside their holes.
+    pub fn contains(&self, p: Coord<f64>) -> bool {
+        let Some(far) = self.tree.root().envelope().upper().first().copied() else {
+            return false;
+        };
+        // Count crossings of the ray from p towards +x; half-open in y so a vertex on the ray
+        // counts once.
+        let ray = AABB::from_corners([p.x, p.y], [far.max(p.x), p.y]);
+        let crossings = self
+            .tree
+            .locate_in_envelope_intersecting(&ray)
+            .filter(|s| {
+                (s.a.y > p.y) != (s.b.y > p.y)
+                    && p.x < s.a.x + (p.y - s.a.y) * (s.b.x - s.a.x) / (s.b.y - s.a.y)
+            })
+            .count();
+        crossings % 2 == 1
+    }
+
+    /// Distance from `p` to the nearest segment, skipping those `skip` rejects.
+    pub fn distance(&self, p: Coord<f64>, skip: impl Fn(&Segment) -> bool) -> f64 {
+        self.tree
+            .nearest_neighbor_iter_with_distance_2(&[p.x, p.y])
+            .find(|(s, _)| !skip(s))
+            .map_or(f64::INFINITY, |(_, d2)| d2.sqrt())
+    }
+
+    /// The nearest segment to `p`.
+    pub fn nearest(&self, p: Coord<f64>) -> Option<&Segment> {
+        self.tree.nearest_neighbor(&[p.x, p.y])
+    }
+
+    /// Whether two segments of the rings meet anywhere other than at the vertex that joins
+    /// consecutive segments of one ring: a valid outline has no such pair.
+    pub fn self_intersects(&self) -> bool {
+        self.tree.iter().any(|s| {
+            self.tree
+                .locate_in_envelope_intersecting(&s.envelope())
+                .any(|t| {
+                    (t.ring, t.index) != (s.ring, s.index)
+                        && !self.consecutive(s, t)
+                        && segments_intersect(s.a, s.b, t.a, t.b)
+                })
+        })
+    }
+
+    /// Whether `s` and `t` follow each other in one ring (so they share exactly one vertex).
+    fn consecutive(&self, s: &Segment, t: &Segment) -> bool {
+        if s.ring != t.ring {
+            return false;
+        }
+        let n = self.ring_lengths[s.ring];
+        (s.index + 1) % n == t.index || (t.index + 1) % n == s.index
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(x0: f64, y0: f64, side: f64) -> Vec<Coord<f64>> {
+        vec![
+            Coord { x: x0, y: y0 },
+            Coord { x: x0 + side, y: y0 },
+            Coord { x: x0 + side, y: y0 + side },
+            Coord { x: x0, y: y0 + side },
+        ]
+    }
+
+    #[test]
+    fn containment_respects_holes() {
+        let index = RingIndex::new(&[square(0.0, 0.0, 10.0), square(4.0, 4.0, 2.0)]);
+        assert!(index.contains(Coord { x: 1.0, y: 1.0 }));
+        assert!(!index.contains(Coord { x: 5.0, y: 5.0 }));
+        assert!(!index.contains(Coord { x: 11.0, y: 5.0 }));
+        // On the level of a vertex: counted once.
+        assert!(index.contains(Coord { x: 2.0, y: 4.0 }));
+    }
+
+    #[test]
+    fn distance_and_self_intersection() {
+        let index = RingIndex::new(&[square(0.0, 0.0, 10.0)]);
+        assert!((index.distance(Coord { x: 3.0, y: 1.0 }, |_| false) - 1.0).abs() < 1e-12);
+        assert!((index.distance(Coord { x: 3.0, y: 1.0 }, |s| s.index == 0) - 3.0).abs() < 1e-12);
+        assert!(!index.self_intersects());
+        let bowtie = vec![
+            Coord { x: 0.0, y: 0.0 },
+            Coord { x: 2.0, y: 2.0 },
+            Coord { x: 2.0, y: 0.0 },
+            Coord { x: 0.0, y: 2.0 },
+        ];
+        assert!(RingIndex::new(&[bowtie]).self_intersects());
+        // Two rings that cross each other.
+        assert!(RingIndex::new(&[square(0.0, 0.0, 2.0), square(1.0, 1.0, 2.0)]).self_intersects());
+        assert!(!RingIndex::new(&[square(0.0, 0.0, 2.0), square(3.0, 3.0, 2.0)]).self_intersects());
+    }
+}

@@ -1,0 +1,216 @@
+//! The method of method.md, one module per step, in the order the data flows:
+//!
+//! regions → [`frame`] (unit-cell frame) → [`outline`] (centroids, adjacency, outline) →
+//! [`network`] (pruned constrained Delaunay network) → [`forces`] + [`snake`] (moved network) →
+//! [`grid`] (lattice fitted to the moved outline) → [`assign`] (one-to-one assignment) →
+//! [`refine`] (adjacency-aware local search) → [`metrics`] → [`candidates`] (several runs,
+//! ranked by TOPSIS) → [`GridMap`].
+//!
+//! Everything here is planar and knows nothing of GDAL, the C API or QGIS.
+
+pub mod assign;
+pub mod candidates;
+pub mod forces;
+pub mod frame;
+pub mod geometry;
+pub mod grid;
+pub mod metrics;
+pub mod network;
+pub mod outline;
+pub mod params;
+pub mod rank;
+pub mod refine;
+pub mod snake;
+
+use geo::{Coord, MultiPolygon, Polygon};
+use serde::Serialize;
+use std::fmt;
+
+pub use params::{LoadModel, Params};
+
+/// One input region: a unique id and its (multi)polygon in a planar CRS.
+#[derive(Clone, Debug)]
+pub struct Region {
+    pub id: String,
+    pub geometry: MultiPolygon<f64>,
+}
+
+/// Why a run failed. `InvalidInput` names the offending feature when there is one.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Error {
+    InvalidInput {
+        feature: Option<String>,
+        message: String,
+    },
+    InvalidParameter(String),
+    /// Reading or writing a dataset failed (only the I/O layer makes these).
+    Io(String),
+    Cancelled,
+    Internal(String),
+}
+
+impl Error {
+    pub fn input(feature: Option<&str>, message: impl Into<String>) -> Self {
+        Error::InvalidInput {
+            feature: feature.map(str::to_owned),
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::InvalidInput {
+                feature: Some(id),
+                message,
+            } => write!(f, "feature {id}: {message}"),
+            Error::InvalidInput {
+                feature: None,
+                message,
+            } => write!(f, "{message}"),
+            Error::InvalidParameter(message) => write!(f, "{message}"),
+            Error::Io(message) => write!(f, "{message}"),
+            Error::Cancelled => write!(f, "cancelled"),
+            Error::Internal(message) => write!(f, "internal error: {message}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+/// Progress reporting: called with the fraction done (0..=1) and a short message; returning
+/// `false` cancels the run, which then ends with [`Error::Cancelled`]. Called from worker
+/// threads, hence `Sync`.
+pub type Progress<'a> = &'a (dyn Fn(f64, &str) -> bool + Sync);
+
+/// Why the Snake stopped (method.md §5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// No node moved more than ε in the last step: the centroids are grid-like.
+    Converged,
+    /// The largest uncapped force did not fall for 3 steps (only when asked for).
+    NoProgress,
+    /// T_s steps were made.
+    MaxSteps,
+    /// A step stayed invalid after halving it 4 times; the last valid state was kept.
+    InvalidStep,
+    /// The Snake was switched off (T_s = 0) or had nothing to move.
+    NotRun,
+}
+
+impl StopReason {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StopReason::Converged => "converged",
+            StopReason::NoProgress => "no_progress",
+            StopReason::MaxSteps => "max_steps",
+            StopReason::InvalidStep => "invalid_step",
+            StopReason::NotRun => "not_run",
+        }
+    }
+}
+
+/// What the Snake did in one run.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SnakeReport {
+    pub steps: usize,
+    pub stop_reason: StopReason,
+    /// Coefficient of variation of the distances between neighbouring centroids, before.
+    pub spread_before: f64,
+    /// The same after the last step: the Snake exists to make it smaller.
+    pub spread_after: f64,
+    /// Network size, for the record.
+    pub nodes: usize,
+    pub edges: usize,
+}
+
+/// The four layout metrics of method.md §8 and their named variants.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct LayoutMetrics {
+    /// C_location: mean distance, in cells, from each original centroid to its cell centre after
+    /// the least-squares scale-and-translation fit. Lower is better.
+    pub location: f64,
+    /// The same without the fit, in map units.
+    pub location_raw: f64,
+    /// The paper's variant: from the moved centroids, in cells, without fit.
+    pub location_moved: f64,
+    /// C_adjacent: share of adjacent pairs whose cells are 8-neighbours. Higher is better.
+    pub adjacent: f64,
+    /// Share of adjacent pairs whose cells share an edge (4-neighbours).
+    pub adjacent_rook: f64,
+    /// C_orientation: mean directed angle error over adjacent pairs, degrees. Lower is better.
+    pub orientation: f64,
+    /// Share of adjacent pairs whose direction is off by more than 45°.
+    pub misdirected: f64,
+    /// C_shape: Fourier-descriptor similarity of the outlines. Higher is better.
+    pub shape: f64,
+}
+
+/// Per-region quality.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct RegionMetrics {
+    /// Distance from the region's centroid to its cell centre, in cells, after the fit.
+    pub displacement: f64,
+    /// Share of the region's adjacent regions whose cells are 8-neighbours of its cell
+    /// (1 when it has no neighbours).
+    pub neighbours_kept: f64,
+    /// Mean angle error to its adjacent regions, degrees (0 when it has none).
+    pub orientation_error: f64,
+}
+
+/// The cell of one region.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegionCell {
+    pub id: String,
+    /// Column from the left (0 = leftmost used column).
+    pub col: i32,
+    /// Row from the top (0 = topmost used row).
+    pub row: i32,
+    /// The square, in map units.
+    pub cell: Polygon<f64>,
+    /// The region's centroid (§1), map units.
+    pub centroid: Coord<f64>,
+    /// Where the Snake moved it, map units.
+    pub moved_centroid: Coord<f64>,
+    pub metrics: RegionMetrics,
+}
+
+/// One candidate layout (§7) and how it ranked.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CandidateReport {
+    /// Noise level MD of its Snake run (0 for the noise-free run).
+    pub noise: f64,
+    /// Lattice origin shift, fractions of a cell (x right, y down).
+    pub shift: [f64; 2],
+    pub metrics: LayoutMetrics,
+    /// TOPSIS closeness to the ideal (higher is better).
+    pub score: f64,
+    pub snake: SnakeReport,
+}
+
+/// The result of a run.
+#[derive(Clone, Debug)]
+pub struct GridMap {
+    /// One cell per region, in the order of the input regions.
+    pub cells: Vec<RegionCell>,
+    /// Side of a cell in map units.
+    pub cell_size: f64,
+    /// Metrics of the chosen layout.
+    pub metrics: LayoutMetrics,
+    /// The chosen candidate's Snake run.
+    pub snake: SnakeReport,
+    /// All candidates, best first; the first is the chosen layout.
+    pub candidates: Vec<CandidateReport>,
+    /// The chosen candidate's moved outline, map units.
+    pub moved_outline: MultiPolygon<f64>,
+    /// Adjacent region pairs, as indices into the input order (i < j).
+    pub adjacency: Vec<(usize, usize)>,
+}
+
+/// Runs the whole method on `regions` (planar coordinates, unique ids) and returns the best
+/// candidate layout. The result does not depend on the order of `regions`.
+pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Result<GridMap, Error> {
+    candidates::generate(regions, params, progress)
+}

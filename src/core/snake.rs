@@ -1,0 +1,363 @@
+//! Step 3 (method.md §4–5): the Snake. Every network edge is a beam with elasticity α and
+//! rigidity β; the centroid forces load the beams; one sparse Cholesky factorisation per step
+//! gives the displacements of all nodes, which are scaled by the step-size rule, limited so the
+//! outline cannot fold, checked, and applied.
+
+use super::forces::{self, Forces};
+use super::geometry::{point_segment_distance2, RingIndex};
+use super::network::Network;
+use super::{Error, LoadModel, Params, SnakeReport, StopReason};
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Mat, Side};
+use geo::Coord;
+use rstar::primitives::GeomWithData;
+use rstar::RTree;
+
+/// Halvings of a step that stays invalid before the Snake gives up (§4).
+const HALVINGS: usize = 4;
+/// Steps over which the largest force must fall, for the no-progress stop (§5).
+const PROGRESS_WINDOW: usize = 3;
+/// Shortest beam length used in the stiffness, in cells: coincident nodes would make the
+/// bending terms (1/h³) blow up.
+const SHORTEST_BEAM: f64 = 1e-6;
+
+/// The network after the Snake.
+#[derive(Clone, Debug)]
+pub struct SnakeRun {
+    /// Every node's position (centroids first, as in the network).
+    pub positions: Vec<Coord<f64>>,
+    pub report: SnakeReport,
+}
+
+/// Runs the Snake on `network` with the neighbour lists N(i) of the forces; `keep_going` is asked
+/// before every step and cancels the run when it returns false.
+pub fn run(
+    network: &Network,
+    neighbours: &[Vec<usize>],
+    params: &Params,
+    keep_going: &dyn Fn() -> bool,
+) -> Result<SnakeRun, Error> {
+    let m = network.centroids;
+    let mut positions = network.nodes.clone();
+    let spread_before = forces::spread(&positions[..m], neighbours);
+    let mut report = SnakeReport {
+        steps: 0,
+        stop_reason: StopReason::NotRun,
+        spread_before,
+        spread_after: spread_before,
+        nodes: network.nodes.len(),
+        edges: network.edges.len(),
+    };
+    if params.max_steps == 0 || m < 2 {
+        return Ok(SnakeRun { positions, report });
+    }
+    let mut solver = BeamSolver::new(network, params);
+    let mut largest_forces = Vec::new();
+    report.stop_reason = StopReason::MaxSteps;
+    while report.steps < params.max_steps {
+        if !keep_going() {
+            return Err(Error::Cancelled);
+        }
+        let forces = forces::compute(&positions[..m], neighbours, params.force_cap);
+        largest_forces.push(forces.largest);
+        if no_progress(&largest_forces) && params.stop_on_no_progress {
+            report.stop_reason = StopReason::NoProgress;
+            break;
+        }
+        let displacement = solver.solve(&positions, &forces)?;
+        let step = scale_step(displacement, &forces, params.step_ratio);
+        let Some(applied) = apply_valid_step(network, &positions, step) else {
+            report.stop_reason = StopReason::InvalidStep;
+            break;
+        };
+        report.steps += 1;
+        let largest_move = applied
+            .iter()
+            .zip(&positions)
+            .map(|(a, b)| length(*a - *b))
+            .fold(0.0, f64::max);
+        positions = applied;
+        if largest_move < params.epsilon {
+            report.stop_reason = StopReason::Converged;
+            break;
+        }
+    }
+    report.spread_after = forces::spread(&positions[..m], neighbours);
+    Ok(SnakeRun { positions, report })
+}
+
+fn length(c: Coord<f64>) -> f64 {
+    (c.x * c.x + c.y * c.y).sqrt()
+}
+
+/// True when the latest `PROGRESS_WINDOW` largest forces are none below the one before them.
+fn no_progress(history: &[f64]) -> bool {
+    history.len() > PROGRESS_WINDOW && {
+        let (before, recent) = history.split_at(history.len() - PROGRESS_WINDOW);
+        let reference = before[before.len() - 1];
+        recent.iter().all(|&f| f >= reference)
+    }
+}
+
+/// The beam-element stiffness system of the network, with its symbolic factorisation kept
+/// across steps (the sparsity pattern never changes, only the values).
+struct BeamSolver<'a> {
+    network: &'a Network,
+    alpha: f64,
+    beta: f64,
+    spring: f64,
+    load_model: LoadModel,
+    symbolic: Option<SymbolicLlt<usize>>,
+}
+
+impl<'a> BeamSolver<'a> {
+    fn new(network: &'a Network, params: &Params) -> Self {
+        BeamSolver {
+            network,
+            alpha: params.alpha,
+            beta: params.beta,
+            spring: params.spring,
+            load_model: params.load_model,
+            symbolic: None,
+        }
+    }
+
+    /// Solves K·D = F for both axes at once and returns each node's displacement.
+    fn solve(&mut self, positions: &[Coord<f64>], forces: &Forces) -> Result<Vec<Coord<f64>>, Error> {
+        let n = positions.len();
+        let dofs = 2 * n;
+        let mut entries: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(16 * self.network.edges.len() + n);
+        let mut load = Mat::<f64>::zeros(dofs, 2);
+        let mut diagonal_sum = 0.0;
+        let force = |i: usize| forces.vectors.get(i).copied().unwrap_or_default();
+        for &[a, b] in &self.network.edges {
+            let h = length(positions[b] - positions[a]).max(SHORTEST_BEAM);
+            let k = beam_matrix(h, self.alpha, self.beta);
+            let dof = [2 * a, 2 * a + 1, 2 * b, 2 * b + 1];
+            for (r, row) in k.iter().enumerate() {
+                for (c, &v) in row.iter().enumerate() {
+                    entries.push(Triplet::new(dof[r], dof[c], v));
+                }
+            }
+            diagonal_sum += k[0][0] + k[2][2];
+            if self.load_model == LoadModel::Element {
+                // Eq. 3 with the slope load of the far end on d'(x_1).
+                let (fa, fb) = (force(a), force(b));
+                let weights = [h / 2.0, h * h / 12.0, h / 2.0, -h * h / 12.0];
+                for (axis, (ua, ub)) in [(fa.x, fb.x), (fa.y, fb.y)].into_iter().enumerate() {
+                    for (slot, value) in [ua, ua, ub, ub].into_iter().enumerate() {
+                        load[(dof[slot], axis)] += weights[slot] * value;
+                    }
+                }
+            }
+        }
+        if self.load_model == LoadModel::Nodal {
+            for (i, f) in forces.vectors.iter().enumerate() {
+                load[(2 * i, 0)] += f.x;
+                load[(2 * i, 1)] += f.y;
+            }
+        }
+        // The weak spring to every node's current position makes K definite without pinning an
+        // arbitrary node (§4 [differs]).
+        let kappa = self.spring * diagonal_sum / n as f64;
+        for i in 0..n {
+            entries.push(Triplet::new(2 * i, 2 * i, kappa));
+            // A slope of a node without edges would be a zero row.
+            entries.push(Triplet::new(2 * i + 1, 2 * i + 1, kappa * 1e-6));
+        }
+        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(dofs, dofs, &entries)
+            .map_err(|e| Error::Internal(format!("stiffness matrix: {e:?}")))?;
+        let symbolic = match &self.symbolic {
+            Some(s) => s.clone(),
+            None => {
+                let s = SymbolicLlt::try_new(matrix.symbolic(), Side::Lower)
+                    .map_err(|e| Error::Internal(format!("symbolic factorisation: {e:?}")))?;
+                self.symbolic = Some(s.clone());
+                s
+            }
+        };
+        let llt = Llt::try_new_with_symbolic(symbolic, matrix.as_ref(), Side::Lower)
+            .map_err(|e| Error::Internal(format!("the stiffness matrix is not definite: {e:?}")))?;
+        let solution = llt.solve(&load);
+        Ok((0..n)
+            .map(|i| Coord {
+                x: solution[(2 * i, 0)],
+                y: solution[(2 * i, 1)],
+            })
+            .collect())
+    }
+}
+
+/// K_e = α·T(h) + β·B(h) over (d_a, d'_a, d_b, d'_b): the Hermite tension matrix and the
+/// Euler-Bernoulli bending matrix of method.md §4 (the paper's Eq. 2 corrected).
+fn beam_matrix(h: f64, alpha: f64, beta: f64) -> [[f64; 4]; 4] {
+    let t = [
+        [6.0 / (5.0 * h), 0.1, -6.0 / (5.0 * h), 0.1],
+        [0.1, 2.0 * h / 15.0, -0.1, -h / 30.0],
+        [-6.0 / (5.0 * h), -0.1, 6.0 / (5.0 * h), -0.1],
+        [0.1, -h / 30.0, -0.1, 2.0 * h / 15.0],
+    ];
+    let (h2, h3) = (h * h, h * h * h);
+    let b = [
+        [12.0 / h3, 6.0 / h2, -12.0 / h3, 6.0 / h2],
+        [6.0 / h2, 4.0 / h, -6.0 / h2, 2.0 / h],
+        [-12.0 / h3, -6.0 / h2, 12.0 / h3, -6.0 / h2],
+        [6.0 / h2, 2.0 / h, -6.0 / h2, 4.0 / h],
+    ];
+    let mut k = [[0.0; 4]; 4];
+    for r in 0..4 {
+        for c in 0..4 {
+            k[r][c] = alpha * t[r][c] + beta * b[r][c];
+        }
+    }
+    k
+}
+
+/// The step-size rule (§4): scale all displacements so the centroid with the largest force moves
+/// as far as its (capped) force, then shrink so no node moves more than R times that.
+fn scale_step(mut d: Vec<Coord<f64>>, forces: &Forces, ratio: f64) -> Vec<Coord<f64>> {
+    let goal = length(forces.vectors[forces.worst]);
+    let largest = d.iter().map(|&v| length(v)).fold(0.0, f64::max);
+    if goal == 0.0 || largest == 0.0 {
+        return vec![Coord::default(); d.len()];
+    }
+    let at_worst = length(d[forces.worst]);
+    let mut k = if at_worst > largest * 1e-9 {
+        goal / at_worst
+    } else {
+        goal / largest
+    };
+    if largest * k > ratio * goal {
+        k = ratio * goal / largest;
+    }
+    for v in &mut d {
+        *v = *v * k;
+    }
+    d
+}
+
+/// Applies `step` so that the outline cannot fold and no centroid can leave it. Before the step,
+/// each node is limited to a third of its clearance: a centroid's distance to the outline; an
+/// outline vertex's distance to the segments it is not part of and its own segments' distance to
+/// the nearest other node (so a long segment cannot sweep over a centroid or a vertex). Two things that are
+/// `d` apart then close by at most 2d/3. The result is checked anyway, and the step halved up to
+/// `HALVINGS` times while it is invalid. `None` when no valid step was found.
+fn apply_valid_step(network: &Network, positions: &[Coord<f64>], mut step: Vec<Coord<f64>>) -> Option<Vec<Coord<f64>>> {
+    let m = network.centroids;
+    let rings = network.ring_coords(positions);
+    let index = RingIndex::new(&rings);
+    // Every node as a point tagged with its node index.
+    let points = RTree::bulk_load(
+        positions
+            .iter()
+            .enumerate()
+            .map(|(n, c)| GeomWithData::new([c.x, c.y], n))
+            .collect(),
+    );
+    for (r, ring) in network.rings.iter().enumerate() {
+        let len = ring.nodes.len();
+        // Each segment's distance to the nearest node that is not one of its ends.
+        let segment_clearance: Vec<f64> = (0..len)
+            .map(|k| {
+                let ends = [ring.nodes[k], ring.nodes[(k + 1) % len]];
+                segment_to_points(rings[r][k], rings[r][(k + 1) % len], &points, |n| ends.contains(&n))
+            })
+            .collect();
+        for (k, &node) in ring.nodes.iter().enumerate() {
+            let own = |s: &super::geometry::Segment| s.ring == r && (s.index == k || (s.index + 1) % len == k);
+            let clearance = index
+                .distance(positions[node], own)
+                .min(segment_clearance[k])
+                .min(segment_clearance[(k + len - 1) % len]);
+            limit(&mut step[node], clearance / 3.0);
+        }
+    }
+    for (c, v) in step[..m].iter_mut().enumerate() {
+        limit(v, index.distance(positions[c], |_| false) / 3.0);
+    }
+    for _ in 0..=HALVINGS {
+        let moved: Vec<Coord<f64>> = positions.iter().zip(&step).map(|(p, v)| *p + *v).collect();
+        let outline = RingIndex::new(&network.ring_coords(&moved));
+        if !outline.self_intersects() && moved[..m].iter().all(|&c| outline.contains(c)) {
+            return Some(moved);
+        }
+        for v in &mut step {
+            *v = *v * 0.5;
+        }
+    }
+    None
+}
+
+fn limit(v: &mut Coord<f64>, most: f64) {
+    let len = length(*v);
+    if len > most {
+        *v = *v * (most / len);
+    }
+}
+
+/// Distance from the segment `a`–`b` to the nearest of `points` that `skip` does not reject:
+/// search outwards from the midpoint until points are farther than the best distance plus half
+/// the segment.
+fn segment_to_points(
+    a: Coord<f64>,
+    b: Coord<f64>,
+    points: &RTree<GeomWithData<[f64; 2], usize>>,
+    skip: impl Fn(usize) -> bool,
+) -> f64 {
+    let mid = (a + b) / 2.0;
+    let half = length(b - a) / 2.0;
+    let mut best = f64::INFINITY;
+    for (p, d2) in points.nearest_neighbor_iter_with_distance_2(&[mid.x, mid.y]) {
+        if d2.sqrt() - half > best {
+            break;
+        }
+        if skip(p.data) {
+            continue;
+        }
+        let at = Coord { x: p.geom()[0], y: p.geom()[1] };
+        best = best.min(point_segment_distance2(at, a, b).sqrt());
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn beam_matrix_is_symmetric_and_a_rigid_shift_costs_nothing() {
+        let k = beam_matrix(0.7, 1.3, 0.4);
+        for (r, row) in k.iter().enumerate() {
+            for (c, value) in row.iter().enumerate() {
+                assert!((value - k[c][r]).abs() < 1e-12);
+            }
+        }
+        // A rigid translation (d_a = d_b = 1, slopes 0) produces no force.
+        for row in &k {
+            assert!((row[0] + row[2]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_step_rule_moves_the_worst_centroid_by_its_force_and_caps_the_rest() {
+        let forces = Forces {
+            vectors: vec![Coord { x: 0.1, y: 0.0 }, Coord { x: 0.0, y: 0.0 }],
+            largest: 0.1,
+            worst: 0,
+        };
+        let d = vec![Coord { x: 0.02, y: 0.0 }, Coord { x: 0.0, y: 0.5 }];
+        let s = scale_step(d, &forces, 5.0);
+        // Scaled by 5 to move the worst by 0.1 would move node 1 by 2.5 > 5·0.1: capped to 0.5.
+        assert!((length(s[1]) - 0.5).abs() < 1e-12);
+        assert!((length(s[0]) - 0.02).abs() < 1e-12);
+    }
+
+    #[test]
+    fn no_progress_needs_three_steps_without_a_fall() {
+        assert!(!no_progress(&[1.0, 0.9, 0.8, 0.7]));
+        assert!(no_progress(&[1.0, 0.5, 0.6, 0.55, 0.5]));
+        assert!(!no_progress(&[0.5, 0.6, 0.7]));
+    }
+}
