@@ -1,0 +1,751 @@
+//! Step 4a (method.md §6): a square lattice fitted to the moved outline, each cell scored by how
+//! much of it the outline covers.
+//!
+//! The covered areas come from one exact scanline pass over the outline's segments (the
+//! "cover and area" accumulation of anti-aliasing rasterisers), not from a polygon boolean per
+//! cell. Work in lattice units, u to the right and v downwards, so that cell (col, row) is the
+//! unit square [col, col+1] × [row, row+1]. For a closed ring, the area of a cell that lies
+//! inside the ring is the integral over the cell's rows of the signed length of the edges to
+//! the right of each point (Green's theorem). A segment piece inside one cell contributes
+//! (mean u − col)·Δv to that cell and the full Δv to every cell on its left in the same row. So
+//! each segment only touches the cells it passes through (the boundary cells); a right-to-left
+//! running sum over each row gives every other cell's area, which is then exactly 0 or 1. The
+//! centre test uses the same running sum on the winding number of the row's centre line.
+//! Everything is linear in the number of boundary cells plus inside cells, independent of the
+//! number of outline vertices per cell.
+
+use geo::{Area, BoundingRect, Coord, LineString, MultiPolygon, Polygon};
+
+/// One lattice cell and its score (1 if its centre is inside the outline, plus the covered
+/// share of its area).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LatticeCell {
+    pub col: i32,
+    pub row: i32,
+    pub score: f64,
+}
+
+/// A square lattice: column `col` spans x from `origin.x + col·cell_size`, row `row` spans y
+/// downwards from `origin.y − row·cell_size`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lattice {
+    pub cell_size: f64,
+    /// Top-left corner of cell (0, 0).
+    pub origin: Coord<f64>,
+    /// Every cell with a positive score, best first (score descending, then row, then column).
+    pub cells: Vec<LatticeCell>,
+}
+
+impl Lattice {
+    /// The centre of cell (`col`, `row`).
+    pub fn centre(&self, col: i32, row: i32) -> Coord<f64> {
+        Coord {
+            x: self.x_at(f64::from(col) + 0.5),
+            y: self.y_at(f64::from(row) + 0.5),
+        }
+    }
+
+    /// The square of cell (`col`, `row`), counter-clockwise from its bottom-left corner. Each
+    /// side is computed from its own lattice line, so neighbouring squares share bit-identical
+    /// corners and their union has no slivers.
+    pub fn square(&self, col: i32, row: i32) -> Polygon<f64> {
+        let (x0, x1) = (self.x_at(f64::from(col)), self.x_at(f64::from(col) + 1.0));
+        let (y1, y0) = (self.y_at(f64::from(row)), self.y_at(f64::from(row) + 1.0));
+        Polygon::new(
+            LineString::from(vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)]),
+            vec![],
+        )
+    }
+
+    /// The x of lattice column coordinate `u` (cells from the left edge of column 0).
+    fn x_at(&self, u: f64) -> f64 {
+        self.origin.x + u * self.cell_size
+    }
+
+    /// The y of lattice row coordinate `v` (cells down from the top edge of row 0).
+    fn y_at(&self, v: f64) -> f64 {
+        self.origin.y - v * self.cell_size
+    }
+}
+
+/// Fits the lattice to `outline` for `regions` cells: S' = sqrt(area / regions), origin at the
+/// outline's (x_min, y_max) moved right by `shift[0]·S'` and down by `shift[1]·S'`, extended by
+/// a cell on every side so the outline is covered.
+///
+/// The extension puts the top-left corner of cell (0, 0) one cell left of and one cell above the
+/// shifted origin, so with shifts in [0, 1) every point of the outline has u, v > 0 and no cell
+/// that the outline reaches has a negative column or row. Only cells with a positive score are
+/// listed, so the lattice has no fixed width: it reaches as far right and down as the outline.
+///
+/// Holes count as outside. A cell whose covered share is within 1e-9 of a whole number gets
+/// exactly that number, so that cells wholly inside tie at a score of exactly 2 and are ordered
+/// by row and column rather than by rounding noise, and cells the outline only grazes drop out.
+///
+/// With no regions or an outline without area there is nothing to fit: the lattice then has no
+/// cells, a cell size of 0 and its origin at (0, 0).
+pub fn fit(outline: &MultiPolygon<f64>, regions: usize, shift: [f64; 2]) -> Lattice {
+    let size = (outline.unsigned_area() / regions as f64).sqrt();
+    let corner = outline.bounding_rect();
+    let (Some(corner), true) = (corner, size.is_finite() && size > 0.0) else {
+        return Lattice {
+            cell_size: 0.0,
+            origin: Coord { x: 0.0, y: 0.0 },
+            cells: Vec::new(),
+        };
+    };
+    let origin = Coord {
+        x: corner.min().x + (shift[0] - 1.0) * size,
+        y: corner.max().y - (shift[1] - 1.0) * size,
+    };
+    let mut lattice = Lattice {
+        cell_size: size,
+        origin,
+        cells: Vec::new(),
+    };
+    let mut events = Vec::new();
+    for polygon in outline {
+        // Exteriors add area, holes remove it, whatever the orientation of their rings.
+        ring_events(&lattice, polygon.exterior(), 1.0, &mut events);
+        for hole in polygon.interiors() {
+            ring_events(&lattice, hole, -1.0, &mut events);
+        }
+    }
+    lattice.cells = sweep(events);
+    lattice.cells.sort_by(|a, b| {
+        b.score
+            .total_cmp(&a.score)
+            .then(a.row.cmp(&b.row))
+            .then(a.col.cmp(&b.col))
+    });
+    lattice
+}
+
+/// What one segment piece (or one crossing of a row's centre line) does to one row of cells.
+#[derive(Clone, Copy, Debug)]
+struct Event {
+    row: i32,
+    col: i32,
+    /// Area added to cell `col` itself, in cells.
+    own: f64,
+    /// Area added to every cell left of `col` in the row.
+    left: f64,
+    /// Winding number added to the centre of every cell left of `col` in the row.
+    wind: i32,
+}
+
+/// Adds the events of one closed ring. `role` is +1 for an exterior and −1 for a hole; the
+/// ring's own orientation is normalised so that its inside counts `role` times.
+fn ring_events(lattice: &Lattice, ring: &LineString<f64>, role: f64, events: &mut Vec<Event>) {
+    let to_lattice = |c: &Coord<f64>| Coord {
+        x: (c.x - lattice.origin.x) / lattice.cell_size,
+        y: (lattice.origin.y - c.y) / lattice.cell_size,
+    };
+    let points: Vec<Coord<f64>> = ring.coords().map(to_lattice).collect();
+    // Shoelace area in lattice coordinates; with u right and v down, a ring with a positive
+    // value here has its inside on the side that the edge integral counts positively.
+    let twice_area: f64 = points
+        .windows(2)
+        .map(|w| w[0].x * w[1].y - w[1].x * w[0].y)
+        .sum();
+    if twice_area == 0.0 {
+        // A ring without area covers nothing and its centre-line crossings cancel out.
+        return;
+    }
+    let sign = role * twice_area.signum();
+    for w in points.windows(2) {
+        edge_events(w[0], w[1], sign, events);
+    }
+}
+
+/// Adds the events of the edge `a → b` (lattice coordinates) of a ring counted `sign` times.
+fn edge_events(a: Coord<f64>, b: Coord<f64>, sign: f64, events: &mut Vec<Event>) {
+    let dv = b.y - a.y;
+    if dv == 0.0 {
+        // A horizontal edge has no cells beside it in v and crosses no centre line.
+        return;
+    }
+    let u_at = |v: f64| a.x + (v - a.y) / dv * (b.x - a.x);
+    let (v_min, v_max) = (a.y.min(b.y), a.y.max(b.y));
+    let first = v_min.floor() as i32;
+    let last = (v_max.ceil() as i32 - 1).max(first);
+    let wind = (sign * dv.signum()) as i32;
+    for row in first..=last {
+        let top = f64::from(row);
+        let (lo, hi) = (v_min.max(top), v_max.min(top + 1.0));
+        if hi > lo {
+            // The piece of the edge inside this row, in the edge's own direction.
+            let (v0, v1) = if dv > 0.0 { (lo, hi) } else { (hi, lo) };
+            piece_events(row, (u_at(v0), u_at(v1)), v1 - v0, sign, events);
+        }
+        // Half-open test, so a vertex exactly on the centre line is counted once.
+        let centre = top + 0.5;
+        if (a.y < centre) != (b.y < centre) {
+            let col = (u_at(centre) - 0.5).ceil() as i32;
+            events.push(Event {
+                row,
+                col,
+                own: 0.0,
+                left: 0.0,
+                wind,
+            });
+        }
+    }
+}
+
+/// Adds the events of a segment piece within one row, running from u = `us.0` to `us.1` while
+/// v changes by `dv` (≠ 0), split at every column line it crosses.
+fn piece_events(row: i32, us: (f64, f64), dv: f64, sign: f64, events: &mut Vec<Event>) {
+    let (u_min, u_max) = (us.0.min(us.1), us.0.max(us.1));
+    let first = u_min.floor() as i32;
+    let last = (u_max.ceil() as i32 - 1).max(first);
+    for col in first..=last {
+        let left_edge = f64::from(col);
+        let (lo, hi) = if first == last {
+            (u_min, u_max)
+        } else {
+            (u_min.max(left_edge), u_max.min(left_edge + 1.0))
+        };
+        // v is linear in u along the piece, so its change within the column is the piece's
+        // change in proportion to the u covered.
+        let dv_part = if first == last {
+            dv
+        } else {
+            dv * (hi - lo) / (u_max - u_min)
+        };
+        events.push(Event {
+            row,
+            col,
+            own: sign * ((lo + hi) / 2.0 - left_edge) * dv_part,
+            left: sign * dv_part,
+            wind: 0,
+        });
+    }
+}
+
+/// Turns the events into the scored cells (unsorted): per row, from right to left, a running
+/// sum of the `left` areas and windings gives each cell what the segments right of it add.
+fn sweep(mut events: Vec<Event>) -> Vec<LatticeCell> {
+    events.sort_unstable_by(|a, b| a.row.cmp(&b.row).then(b.col.cmp(&a.col)));
+    let mut cells = Vec::new();
+    for row_events in events.chunk_by(|a, b| a.row == b.row) {
+        let row = row_events[0].row;
+        let (mut area, mut wind) = (0.0, 0);
+        let mut next_col = i32::MAX;
+        for group in row_events.chunk_by(|a, b| a.col == b.col) {
+            let col = group[0].col;
+            // Cells between two event columns are crossed by no segment: wholly in or out.
+            if wind != 0 || snap(area) > 0.0 {
+                for gap in (col.saturating_add(1)..next_col).rev() {
+                    push_cell(&mut cells, gap, row, area, wind);
+                }
+            }
+            let own: f64 = group.iter().map(|e| e.own).sum();
+            push_cell(&mut cells, col, row, area + own, wind);
+            area += group.iter().map(|e| e.left).sum::<f64>();
+            wind += group.iter().map(|e| e.wind).sum::<i32>();
+            next_col = col;
+        }
+        // Left of the leftmost event the row is outside: every ring has closed by then, so the
+        // running sums are back to 0.
+        debug_assert!(
+            wind == 0 && snap(area) == 0.0,
+            "row {row} does not close: {area}"
+        );
+    }
+    cells
+}
+
+/// Records cell (`col`, `row`) if it has a positive score.
+fn push_cell(cells: &mut Vec<LatticeCell>, col: i32, row: i32, area: f64, wind: i32) {
+    let score = if wind != 0 { 1.0 } else { 0.0 } + snap(area);
+    if score > 0.0 {
+        cells.push(LatticeCell { col, row, score });
+    }
+}
+
+/// Clamps a covered share to [0, 1] and snaps it to 0 or 1 when within 1e-9 (see [`fit`]).
+fn snap(area: f64) -> f64 {
+    const TOLERANCE: f64 = 1e-9;
+    let area = area.clamp(0.0, 1.0);
+    if area < TOLERANCE {
+        0.0
+    } else if area > 1.0 - TOLERANCE {
+        1.0
+    } else {
+        area
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use geo::{BooleanOps, Contains, Point};
+    use std::f64::consts::TAU;
+
+    fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon<f64> {
+        Polygon::new(
+            LineString::from(vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)]),
+            vec![],
+        )
+    }
+
+    /// A closed ring of `n` points around `centre`, its radius wobbling with `angle`.
+    fn wobbly_ring(centre: (f64, f64), radius: f64, n: usize) -> LineString<f64> {
+        let mut points: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                let t = TAU * k as f64 / n as f64;
+                let r = radius * (1.0 + 0.2 * (7.0 * t).sin() + 0.07 * (31.0 * t).cos());
+                (centre.0 + r * t.cos(), centre.1 + r * t.sin())
+            })
+            .collect();
+        points.push(points[0]);
+        LineString::from(points)
+    }
+
+    /// A mainland with a lake and an island, far from the origin and not in unit cells.
+    fn map() -> MultiPolygon<f64> {
+        let mut lake = wobbly_ring((5_000.0, -3_000.0), 700.0, 40);
+        lake.0.reverse(); // holes run the other way round, as in valid polygons
+        MultiPolygon(vec![
+            Polygon::new(wobbly_ring((5_300.0, -2_900.0), 3_000.0, 300), vec![lake]),
+            Polygon::new(wobbly_ring((10_500.0, -1_000.0), 900.0, 50), vec![]),
+        ])
+    }
+
+    fn assert_ordered(lattice: &Lattice) {
+        for pair in lattice.cells.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            let ordered =
+                a.score > b.score || (a.score == b.score && (a.row, a.col) < (b.row, b.col));
+            assert!(ordered, "{a:?} before {b:?}");
+        }
+    }
+
+    #[test]
+    fn an_aligned_rectangle_gives_exactly_its_whole_cells() {
+        let outline = MultiPolygon(vec![rectangle(0.0, 0.0, 10.0, 6.0)]);
+        let lattice = fit(&outline, 60, [0.0, 0.0]);
+        assert_eq!(lattice.cell_size, 1.0);
+        assert_eq!(lattice.origin, Coord { x: -1.0, y: 7.0 });
+        // Cells touching the rectangle from outside share only its border: no area, no centre.
+        let expected: Vec<LatticeCell> = (1..=6)
+            .flat_map(|row| {
+                (1..=10).map(move |col| LatticeCell {
+                    col,
+                    row,
+                    score: 2.0,
+                })
+            })
+            .collect();
+        assert_eq!(lattice.cells, expected);
+        assert_eq!(lattice.centre(1, 1), Coord { x: 0.5, y: 5.5 });
+        assert_eq!(lattice.square(1, 1), rectangle(0.0, 5.0, 1.0, 6.0));
+    }
+
+    #[test]
+    fn a_shifted_lattice_scores_partial_cells_by_area_and_centre() {
+        let outline = MultiPolygon(vec![rectangle(0.0, 0.0, 10.0, 6.0)]);
+        let lattice = fit(&outline, 60, [0.25, 0.25]);
+        assert_eq!(lattice.origin, Coord { x: -0.75, y: 6.75 });
+        // Column 0 covers x in [-0.75, 0.25], column 10 [9.25, 10.25]; row 0 covers y in
+        // [5.75, 6.75], row 6 [-0.25, 0.75]. The edge column and row on the left and top hold
+        // a quarter and miss the centre, those on the right and bottom hold three quarters
+        // and their centre.
+        let share = |i: i32, last: i32| match i {
+            0 => (0.25, false),
+            i if i == last => (0.75, true),
+            _ => (1.0, true),
+        };
+        assert_eq!(lattice.cells.len(), 11 * 7);
+        for cell in &lattice.cells {
+            let ((x, x_in), (y, y_in)) = (share(cell.col, 10), share(cell.row, 6));
+            let expected = x * y + if x_in && y_in { 1.0 } else { 0.0 };
+            assert!(
+                (cell.score - expected).abs() < 1e-12,
+                "{cell:?}: {expected}"
+            );
+        }
+        let total: f64 = lattice.cells.iter().map(|c| c.score.fract()).sum::<f64>()
+            + lattice.cells.iter().filter(|c| c.score == 2.0).count() as f64;
+        assert!((total - 60.0).abs() < 1e-9, "covered area {total}");
+        assert_ordered(&lattice);
+    }
+
+    #[test]
+    fn scores_match_a_polygon_boolean_per_cell_with_holes_and_islands() {
+        let outline = map();
+        let lattice = fit(&outline, 150, [0.3, 0.7]);
+        let s = lattice.cell_size;
+        let expected_size = (outline.unsigned_area() / 150.0).sqrt();
+        assert!((s - expected_size).abs() < 1e-9 * s);
+        assert_ordered(&lattice);
+        let reference = |col: i32, row: i32| {
+            let square = lattice.square(col, row);
+            let area = square.intersection(&outline).unsigned_area() / (s * s);
+            let inside = outline.contains(&Point::from(lattice.centre(col, row)));
+            area + if inside { 1.0 } else { 0.0 }
+        };
+        let listed: Vec<(i32, i32)> = lattice.cells.iter().map(|c| (c.col, c.row)).collect();
+        let (mut partial, mut lake_cells) = (0, 0);
+        for cell in &lattice.cells {
+            let expected = reference(cell.col, cell.row);
+            assert!((cell.score - expected).abs() < 1e-6, "{cell:?}: {expected}");
+            partial += usize::from(cell.score.fract() != 0.0);
+            let centre = lattice.centre(cell.col, cell.row);
+            lake_cells += usize::from((centre.x - 5_000.0).hypot(centre.y + 3_000.0) < 300.0);
+        }
+        // The test means something only if it met cut cells, and the lake's middle is empty.
+        assert!(partial > 30, "{partial} partial cells");
+        assert_eq!(lake_cells, 0);
+        // Every cell of the lattice that is not listed scores 0, including the lake's.
+        let (max_col, max_row) = listed
+            .iter()
+            .fold((0, 0), |m, c| (m.0.max(c.0), m.1.max(c.1)));
+        for row in 0..=max_row + 1 {
+            for col in 0..=max_col + 1 {
+                if !listed.contains(&(col, row)) {
+                    assert!(reference(col, row) < 1e-9, "({col}, {row}) missing");
+                }
+            }
+        }
+        let covered: f64 = lattice
+            .cells
+            .iter()
+            .map(|c| c.score - c.score.floor())
+            .sum::<f64>()
+            + lattice.cells.iter().filter(|c| c.score == 2.0).count() as f64;
+        assert!((covered - 150.0).abs() < 1e-6, "covered {covered} cells");
+    }
+
+    #[test]
+    fn ring_orientation_does_not_matter() {
+        let outline = map();
+        let mut reversed = outline.clone();
+        for polygon in &mut reversed.0 {
+            polygon.exterior_mut(|ring| ring.0.reverse());
+            polygon.interiors_mut(|holes| holes.iter_mut().for_each(|h| h.0.reverse()));
+        }
+        let (a, b) = (
+            fit(&outline, 80, [0.5, 0.0]),
+            fit(&reversed, 80, [0.5, 0.0]),
+        );
+        assert_eq!(a.cells.len(), b.cells.len());
+        for (x, y) in a.cells.iter().zip(&b.cells) {
+            assert_eq!((x.col, x.row), (y.col, y.row));
+            assert!((x.score - y.score).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn nothing_to_fit_gives_no_cells() {
+        let square = MultiPolygon(vec![rectangle(0.0, 0.0, 1.0, 1.0)]);
+        assert!(fit(&square, 0, [0.0, 0.0]).cells.is_empty());
+        assert!(fit(&MultiPolygon(vec![]), 5, [0.0, 0.0]).cells.is_empty());
+    }
+}
+#[cfg(test)]
+mod timing {
+    use super::*;
+    use std::f64::consts::TAU;
+    use std::time::Instant;
+    fn ring(c: (f64, f64), r0: f64, n: usize, rev: bool) -> LineString<f64> {
+        let mut p: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                let t = TAU * k as f64 / n as f64;
+                let r = r0
+                    * (1.0
+                        + 0.15 * (9.0 * t).sin()
+                        + 0.04 * (97.0 * t).cos()
+                        + 0.01 * (1201.0 * t).sin());
+                (c.0 + 1.6 * r * t.cos(), c.1 + r * t.sin())
+            })
+            .collect();
+        if rev {
+            p.reverse();
+        }
+        p.push(p[0]);
+        LineString::from(p)
+    }
+    #[test]
+    #[ignore]
+    fn time_all() {
+        let outline = MultiPolygon(vec![
+            Polygon::new(
+                ring((0.0, 0.0), 30.0, 5600, false),
+                vec![
+                    ring((10.0, 5.0), 4.0, 200, true),
+                    ring((-12.0, -6.0), 3.0, 150, true),
+                ],
+            ),
+            Polygon::new(ring((70.0, 30.0), 3.0, 100, false), vec![]),
+        ]);
+        let m = 3100;
+        let t = Instant::now();
+        let mut lattice = fit(&outline, m, [0.5, 0.5]);
+        for _ in 0..9 {
+            lattice = fit(&outline, m, [0.5, 0.5]);
+        }
+        eprintln!(
+            "fit: {:?} per fit, {} cells, S' {}",
+            t.elapsed() / 10,
+            lattice.cells.len(),
+            lattice.cell_size
+        );
+        // regions: jittered centres of the chosen cells
+        let chosen: Vec<Coord<f64>> = lattice.cells[..m]
+            .iter()
+            .map(|c| lattice.centre(c.col, c.row))
+            .collect();
+        let mut points: Vec<Coord<f64>> = chosen
+            .iter()
+            .enumerate()
+            .map(|(i, c)| Coord {
+                x: c.x + 0.3 * lattice.cell_size * ((i as f64 * 1.7).sin()),
+                y: c.y + 0.3 * lattice.cell_size * ((i as f64 * 2.3).cos()),
+            })
+            .collect();
+        points.reverse();
+        let t = Instant::now();
+        let a = crate::core::assign::assign(&points, &chosen);
+        eprintln!("assign: {:?}", t.elapsed());
+        // adjacency: regions whose points are within 1.5 S'
+        let s = lattice.cell_size;
+        let mut adjacency = vec![];
+        for i in 0..m {
+            for j in i + 1..m {
+                let d = points[i] - points[j];
+                if d.x.hypot(d.y) < 1.2 * s {
+                    adjacency.push((i, j));
+                }
+            }
+        }
+        let layout = crate::core::refine::Layout {
+            adjacency: &adjacency,
+            centroids: &points,
+            moved: &points,
+            lattice: &lattice,
+        };
+        let params = crate::core::Params::default();
+        let t = Instant::now();
+        let r = crate::core::refine::refine(&layout, &a, &params, 1);
+        eprintln!(
+            "refine: {:?} ({} pairs), changed {}",
+            t.elapsed(),
+            adjacency.len(),
+            r.iter().zip(&a).filter(|(x, y)| x != y).count()
+        );
+    }
+}
+#[cfg(test)]
+mod real {
+    use super::*;
+    use gdal::vector::LayerAccess;
+    use geo::{unary_union, Centroid, MapCoords};
+    use std::collections::HashMap;
+    #[test]
+    #[ignore]
+    fn us_states() {
+        for name in std::env::var("LAYERS").unwrap().split(',') {
+            let ds = gdal::Dataset::open(format!("/work/shared/data/{name}.gpkg")).unwrap();
+            let mut layer = ds.layer_by_name(name).unwrap();
+            let mut regions: Vec<MultiPolygon<f64>> = vec![];
+            for f in layer.features() {
+                match f.geometry().unwrap().to_geo().unwrap() {
+                    geo::Geometry::MultiPolygon(mp) => regions.push(mp),
+                    geo::Geometry::Polygon(p) => regions.push(MultiPolygon(vec![p])),
+                    _ => panic!(),
+                }
+            }
+            let m = regions.len();
+            let area: f64 = regions.iter().map(|r| r.unsigned_area()).sum();
+            let s = (area / m as f64).sqrt();
+            let regions: Vec<MultiPolygon<f64>> = regions
+                .iter()
+                .map(|r| {
+                    r.map_coords(|c| Coord {
+                        x: c.x / s,
+                        y: c.y / s,
+                    })
+                })
+                .collect();
+            let centroids: Vec<Coord<f64>> =
+                regions.iter().map(|r| r.centroid().unwrap().0).collect();
+            // rook adjacency by shared edges
+            let mut edges: HashMap<[(u64, u64); 2], Vec<usize>> = HashMap::new();
+            for (i, r) in regions.iter().enumerate() {
+                for p in r {
+                    for ring in std::iter::once(p.exterior()).chain(p.interiors()) {
+                        for l in ring.lines() {
+                            let a = (l.start.x.to_bits(), l.start.y.to_bits());
+                            let b = (l.end.x.to_bits(), l.end.y.to_bits());
+                            let k = if a < b { [a, b] } else { [b, a] };
+                            let v = edges.entry(k).or_default();
+                            if !v.contains(&i) {
+                                v.push(i);
+                            }
+                        }
+                    }
+                }
+            }
+            let mut adjacency: Vec<(usize, usize)> = edges
+                .values()
+                .filter(|v| v.len() == 2)
+                .map(|v| (v[0].min(v[1]), v[0].max(v[1])))
+                .collect();
+            adjacency.sort();
+            adjacency.dedup();
+            let outline = unary_union(regions.iter());
+            let nverts: usize = outline
+                .0
+                .iter()
+                .map(|p| {
+                    p.exterior().0.len() + p.interiors().iter().map(|h| h.0.len()).sum::<usize>()
+                })
+                .sum();
+            let metric = |lat: &Lattice, cells: &[usize]| {
+                let mut kept = 0;
+                let mut ang = 0.0;
+                for &(i, j) in &adjacency {
+                    let (a, b) = (lat.cells[cells[i]], lat.cells[cells[j]]);
+                    if (a.col - b.col).abs().max((a.row - b.row).abs()) <= 1 {
+                        kept += 1;
+                    }
+                    let d = centroids[j] - centroids[i];
+                    let (x, y) = (f64::from(b.col - a.col), -f64::from(b.row - a.row));
+                    ang += (d.x * y - d.y * x)
+                        .abs()
+                        .atan2(d.x * x + d.y * y)
+                        .to_degrees();
+                }
+                (
+                    kept as f64 / adjacency.len() as f64,
+                    ang / adjacency.len() as f64,
+                )
+            };
+            eprintln!(
+                "{name}: {m} regions, {} pairs, outline {} vertices",
+                adjacency.len(),
+                nverts
+            );
+            let shifts: Vec<[f64; 2]> = if m > 1000 {
+                vec![[0.0, 0.0]]
+            } else {
+                vec![[0.0, 0.0], [0.0, 0.5], [0.5, 0.0], [0.5, 0.5]]
+            };
+            for shift in shifts {
+                let t = std::time::Instant::now();
+                let lat = fit(&outline, m, shift);
+                let tf = t.elapsed();
+                let chosen: Vec<Coord<f64>> = lat.cells[..m]
+                    .iter()
+                    .map(|c| lat.centre(c.col, c.row))
+                    .collect();
+                let t = std::time::Instant::now();
+                let a = if m > 1000 {
+                    let cache = format!("/tmp/assign_{name}.txt");
+                    if let Ok(text) = std::fs::read_to_string(&cache) {
+                        text.split_whitespace()
+                            .map(|w| w.parse().unwrap())
+                            .collect()
+                    } else {
+                        let a = crate::core::assign::assign(&centroids, &chosen);
+                        std::fs::write(
+                            &cache,
+                            a.iter()
+                                .map(|x| x.to_string())
+                                .collect::<Vec<_>>()
+                                .join(" "),
+                        )
+                        .unwrap();
+                        a
+                    }
+                } else {
+                    crate::core::assign::assign(&centroids, &chosen)
+                };
+                let ta = t.elapsed();
+                let layout = crate::core::refine::Layout {
+                    adjacency: &adjacency,
+                    centroids: &centroids,
+                    moved: &centroids,
+                    lattice: &lat,
+                };
+                let t = std::time::Instant::now();
+                let r =
+                    crate::core::refine::refine(&layout, &a, &crate::core::Params::default(), 0);
+                let tr = t.elapsed();
+                let (k0, a0) = metric(&lat, &a);
+                let (k1, a1) = metric(&lat, &r);
+                let comps = |cells: &[usize]| {
+                    let (mut apart, mut ang, mut mis, mut loc) = (0.0, 0.0, 0.0, 0.0);
+                    for &(i, j) in &adjacency {
+                        let (a, b) = (lat.cells[cells[i]], lat.cells[cells[j]]);
+                        if (a.col - b.col).abs().max((a.row - b.row).abs()) > 1 {
+                            apart += 1.0;
+                        }
+                        let d = centroids[j] - centroids[i];
+                        let (x, y) = (f64::from(b.col - a.col), -f64::from(b.row - a.row));
+                        let g = (d.x * y - d.y * x)
+                            .abs()
+                            .atan2(d.x * x + d.y * y)
+                            .to_degrees();
+                        ang += g / 90.0;
+                        if g > 45.0 {
+                            mis += 0.5;
+                        }
+                    }
+                    for (i, &c) in cells.iter().enumerate() {
+                        let q = lat.cells[c];
+                        let d = centroids[i] - lat.centre(q.col, q.row);
+                        loc += 0.25 * (d.x * d.x + d.y * d.y) / lat.cell_size.powi(2);
+                    }
+                    format!(
+                        "apart {apart:.0} angle {ang:.1} mis {mis:.1} loc {loc:.1} total {:.1}",
+                        apart + ang + mis + loc
+                    )
+                };
+                eprintln!("   input: {}\n   refined: {}", comps(&a), comps(&r));
+                if m > 1000 {
+                    let t = std::time::Instant::now();
+                    let b = crate::core::assign::assign(&centroids, &chosen);
+                    let cost = |x: &[usize]| {
+                        x.iter()
+                            .enumerate()
+                            .map(|(i, &j)| {
+                                let d = centroids[i] - chosen[j];
+                                d.x * d.x + d.y * d.y
+                            })
+                            .sum::<f64>()
+                    };
+                    eprintln!(
+                        "   sparse assign {:?}: cost {} vs lsap {}",
+                        t.elapsed(),
+                        cost(&b),
+                        cost(&a)
+                    );
+                }
+                for (moves, temp) in [
+                    (40_000, 0.1),
+                    (40_000, 0.02),
+                    (400_000, 0.5),
+                    (400_000, 0.1),
+                    (2_000_000, 0.5),
+                ] {
+                    let params = crate::core::Params {
+                        refine_moves: moves,
+                        refine_temperature: temp,
+                        ..Default::default()
+                    };
+                    let t = std::time::Instant::now();
+                    let r2 = crate::core::refine::refine(&layout, &a, &params, 0);
+                    let (k2, a2) = metric(&lat, &r2);
+                    eprintln!(
+                        "   moves {moves} T {temp}: {:?} {k2:.3} {a2:.1}° {}",
+                        t.elapsed(),
+                        comps(&r2)
+                    );
+                }
+                eprintln!("  shift {shift:?}: fit {tf:?} assign {ta:?} refine {tr:?}; plain {k0:.3} {a0:.1}°, refined {k1:.3} {a1:.1}°");
+            }
+        }
+    }
+}
