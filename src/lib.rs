@@ -13,6 +13,6 @@ pub mod io;
 pub mod wkb;
 
 pub use crate::core::{
-    generate, CandidateReport, Error, GridMap, LayoutMetrics, LoadModel, Params, Progress, Region,
-    RegionCell, RegionMetrics, SnakeReport, StopReason,
+    generate, score, CandidateReport, Error, GridMap, LayoutMetrics, LoadModel, Params, Progress,
+    Region, RegionCell, RegionMetrics, SnakeReport, StopReason,
 };

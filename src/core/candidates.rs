@@ -10,8 +10,8 @@ use super::network::{self, Network};
 use super::outline::{self, Prepared};
 use super::snake::{self, SnakeRun};
 use super::{
-    assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params,
-    Progress, Region, RegionCell, RegionMetrics,
+    assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params, Progress,
+    Region, RegionCell, RegionMetrics,
 };
 use geo::{Area, Coord, CoordsIter, MultiPolygon};
 use rand::SeedableRng;
@@ -27,21 +27,19 @@ const NOISE_DRAWS: usize = 16;
 /// See [`crate::generate`].
 pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Result<GridMap, Error> {
     params.validate().map_err(Error::InvalidParameter)?;
-    validate(regions)?;
-    let mut order: Vec<usize> = (0..regions.len()).collect();
-    order.sort_by(|&a, &b| regions[a].id.cmp(&regions[b].id));
-    let sorted: Vec<&MultiPolygon<f64>> = order.iter().map(|&i| &regions[i].geometry).collect();
-    let frame = Frame::of(&sorted)
-        .ok_or_else(|| Error::input(None, "the regions have no area"))?;
-    let unit: Vec<MultiPolygon<f64>> = sorted.iter().map(|g| frame.polygons_to_unit(g)).collect();
-    let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
-
-    let prepared = outline::prepare(&unit_refs, params);
+    let Input {
+        order,
+        frame,
+        prepared,
+    } = Input::of(regions, params)?;
     let base = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
 
     let mut levels = vec![0.0];
     levels.extend(params.noise_levels.iter().copied().filter(|&md| md > 0.0));
-    let tracker = Tracker::new(progress, levels.len() * (params.max_steps + params.shifts.len()));
+    let tracker = Tracker::new(
+        progress,
+        levels.len() * (params.max_steps + params.shifts.len()),
+    );
     let runs = levels
         .par_iter()
         .enumerate()
@@ -109,6 +107,34 @@ pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Resu
     Ok(context.grid_map(regions, &order, best, run, candidates))
 }
 
+/// The regions made ready for the method: sorted by id (`order[k]` is the input index of the
+/// `k`-th), in the unit-cell frame, with centroids, adjacency and outline.
+pub(super) struct Input {
+    pub order: Vec<usize>,
+    pub frame: Frame,
+    pub prepared: Prepared,
+}
+
+impl Input {
+    pub fn of(regions: &[Region], params: &Params) -> Result<Input, Error> {
+        validate(regions)?;
+        let mut order: Vec<usize> = (0..regions.len()).collect();
+        order.sort_by(|&a, &b| regions[a].id.cmp(&regions[b].id));
+        let sorted: Vec<&MultiPolygon<f64>> = order.iter().map(|&i| &regions[i].geometry).collect();
+        let frame =
+            Frame::of(&sorted).ok_or_else(|| Error::input(None, "the regions have no area"))?;
+        let unit: Vec<MultiPolygon<f64>> =
+            sorted.iter().map(|g| frame.polygons_to_unit(g)).collect();
+        let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
+        let prepared = outline::prepare(&unit_refs, params);
+        Ok(Input {
+            order,
+            frame,
+            prepared,
+        })
+    }
+}
+
 /// Refuses what the method cannot work with, naming the feature.
 fn validate(regions: &[Region]) -> Result<(), Error> {
     if regions.is_empty() {
@@ -121,13 +147,23 @@ fn validate(regions: &[Region]) -> Result<(), Error> {
             return Err(Error::input(None, "a region has an empty id"));
         }
         if !seen.insert(id) {
-            return Err(Error::input(Some(id), "the id is used by more than one region"));
+            return Err(Error::input(
+                Some(id),
+                "the id is used by more than one region",
+            ));
         }
         if region.geometry.0.is_empty() {
             return Err(Error::input(Some(id), "the geometry is empty"));
         }
-        if region.geometry.coords_iter().any(|c| !c.x.is_finite() || !c.y.is_finite()) {
-            return Err(Error::input(Some(id), "the geometry has a NaN or infinite coordinate"));
+        if region
+            .geometry
+            .coords_iter()
+            .any(|c| !c.x.is_finite() || !c.y.is_finite())
+        {
+            return Err(Error::input(
+                Some(id),
+                "the geometry has a NaN or infinite coordinate",
+            ));
         }
         // Written so that a NaN area is refused too.
         if region.geometry.unsigned_area().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
@@ -140,7 +176,8 @@ fn validate(regions: &[Region]) -> Result<(), Error> {
 /// A seed for the `k`-th draw of purpose `purpose`, so every random choice is reproducible and
 /// independent of the thread that makes it.
 fn seed(base: u64, purpose: u64, k: usize) -> u64 {
-    base ^ purpose.wrapping_mul(0xD1B5_4A32_D192_ED03) ^ (k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+    base ^ purpose.wrapping_mul(0xD1B5_4A32_D192_ED03)
+        ^ (k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)
 }
 
 /// Strategy 1 of §7: Gaussian noise on the centroids, σ_i = md × the mean distance from centroid
@@ -166,7 +203,12 @@ fn noisy_centroids(prepared: &Prepared, base: &Network, md: f64, seed: u64) -> V
                 return c;
             };
             (0..NOISE_DRAWS)
-                .map(|_| c + Coord { x: normal.sample(&mut rng), y: normal.sample(&mut rng) })
+                .map(|_| {
+                    c + Coord {
+                        x: normal.sample(&mut rng),
+                        y: normal.sample(&mut rng),
+                    }
+                })
                 .find(|&p| inside.contains(p))
                 .unwrap_or(c)
         })
@@ -232,7 +274,13 @@ struct Context<'a> {
 
 impl Context<'_> {
     /// Lattice, assignment, refinement and metrics for one Snake run and one origin shift (§6).
-    fn layout(&self, network: &Network, run: &SnakeRun, shift: [f64; 2], seed: u64) -> Result<Layout, Error> {
+    fn layout(
+        &self,
+        network: &Network,
+        run: &SnakeRun,
+        shift: [f64; 2],
+        seed: u64,
+    ) -> Result<Layout, Error> {
         let m = network.centroids;
         let moved = &run.positions[..m];
         let moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
@@ -268,9 +316,19 @@ impl Context<'_> {
     }
 
     /// The §8 metrics, in map units.
-    fn evaluate(&self, lattice: &Lattice, cells: &[usize], moved: &[Coord<f64>]) -> (LayoutMetrics, Vec<RegionMetrics>) {
+    fn evaluate(
+        &self,
+        lattice: &Lattice,
+        cells: &[usize],
+        moved: &[Coord<f64>],
+    ) -> (LayoutMetrics, Vec<RegionMetrics>) {
         let f = &self.frame;
-        let centroids: Vec<Coord<f64>> = self.prepared.centroids.iter().map(|&c| f.to_map(c)).collect();
+        let centroids: Vec<Coord<f64>> = self
+            .prepared
+            .centroids
+            .iter()
+            .map(|&c| f.to_map(c))
+            .collect();
         let moved: Vec<Coord<f64>> = moved.iter().map(|&c| f.to_map(c)).collect();
         let col_rows: Vec<(i32, i32)> = cells
             .iter()

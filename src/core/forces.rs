@@ -50,7 +50,9 @@ pub fn compute(positions: &[Coord<f64>], neighbours: &[Vec<usize>], cap: f64) ->
                 let len = (d.x * d.x + d.y * d.y).sqrt();
                 (len > 0.0).then(|| positions[j] + d / len)
             });
-            let (sum, count) = proposals.fold((Coord { x: 0.0, y: 0.0 }, 0usize), |(s, n), q| (s + q, n + 1));
+            let (sum, count) = proposals.fold((Coord { x: 0.0, y: 0.0 }, 0usize), |(s, n), q| {
+                (s + q, n + 1)
+            });
             if count == 0 {
                 Coord { x: 0.0, y: 0.0 }
             } else {
@@ -62,7 +64,10 @@ pub fn compute(positions: &[Coord<f64>], neighbours: &[Vec<usize>], cap: f64) ->
         .iter()
         .map(|f| (f.x * f.x + f.y * f.y).sqrt())
         .enumerate()
-        .fold((0, 0.0), |best, (i, len)| if len > best.1 { (i, len) } else { best });
+        .fold(
+            (0, 0.0),
+            |best, (i, len)| if len > best.1 { (i, len) } else { best },
+        );
     if largest > cap {
         let k = cap / largest;
         for f in &mut vectors {
@@ -115,15 +120,28 @@ mod tests {
         assert!((f.largest - 0.6).abs() < 1e-12);
         let capped = compute(&positions, &neighbours, 0.1);
         assert!((capped.vectors[1].x - 0.1).abs() < 1e-12);
-        assert!((capped.largest - 0.6).abs() < 1e-12, "largest is reported uncapped");
+        assert!(
+            (capped.largest - 0.6).abs() < 1e-12,
+            "largest is reported uncapped"
+        );
     }
 
     #[test]
     fn spread_is_zero_for_even_spacing() {
-        let positions: Vec<Coord<f64>> = (0..4).map(|i| Coord { x: i as f64, y: 0.0 }).collect();
+        let positions: Vec<Coord<f64>> = (0..4)
+            .map(|i| Coord {
+                x: i as f64,
+                y: 0.0,
+            })
+            .collect();
         let neighbours = vec![vec![1], vec![0, 2], vec![1, 3], vec![2]];
         assert!(spread(&positions, &neighbours).abs() < 1e-12);
-        let uneven = [positions[0], positions[1], Coord { x: 3.0, y: 0.0 }, Coord { x: 3.5, y: 0.0 }];
+        let uneven = [
+            positions[0],
+            positions[1],
+            Coord { x: 3.0, y: 0.0 },
+            Coord { x: 3.5, y: 0.0 },
+        ];
         assert!(spread(&uneven, &neighbours) > 0.3);
     }
 }

@@ -63,8 +63,12 @@ mod tests {
 
     #[test]
     fn the_frame_makes_cells_unit_sized_and_round_trips() {
-        let a = MultiPolygon(vec![polygon![(x: 0.0, y: 0.0), (x: 200.0, y: 0.0), (x: 200.0, y: 200.0), (x: 0.0, y: 200.0)]]);
-        let b = MultiPolygon(vec![polygon![(x: 200.0, y: 0.0), (x: 400.0, y: 0.0), (x: 400.0, y: 200.0), (x: 200.0, y: 200.0)]]);
+        let a = MultiPolygon(vec![
+            polygon![(x: 0.0, y: 0.0), (x: 200.0, y: 0.0), (x: 200.0, y: 200.0), (x: 0.0, y: 200.0)],
+        ]);
+        let b = MultiPolygon(vec![
+            polygon![(x: 200.0, y: 0.0), (x: 400.0, y: 0.0), (x: 400.0, y: 200.0), (x: 200.0, y: 200.0)],
+        ]);
         let f = Frame::of(&[&a, &b]).unwrap();
         assert_eq!(f.scale, 200.0);
         assert_eq!(f.origin, Coord { x: 200.0, y: 100.0 });

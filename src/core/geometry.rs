@@ -71,7 +71,11 @@ pub fn segments_intersect(p1: Coord<f64>, p2: Coord<f64>, q1: Coord<f64>, q2: Co
         return true;
     }
     let on = |o: Coord<f64>, a: Coord<f64>, p: Coord<f64>, d: f64| {
-        d == 0.0 && p.x >= o.x.min(a.x) && p.x <= o.x.max(a.x) && p.y >= o.y.min(a.y) && p.y <= o.y.max(a.y)
+        d == 0.0
+            && p.x >= o.x.min(a.x)
+            && p.x <= o.x.max(a.x)
+            && p.y >= o.y.min(a.y)
+            && p.y <= o.y.max(a.y)
     };
     on(q1, q2, p1, d1) || on(q1, q2, p2, d2) || on(p1, p2, q1, d3) || on(p1, p2, q2, d4)
 }
@@ -165,9 +169,18 @@ mod tests {
     fn square(x0: f64, y0: f64, side: f64) -> Vec<Coord<f64>> {
         vec![
             Coord { x: x0, y: y0 },
-            Coord { x: x0 + side, y: y0 },
-            Coord { x: x0 + side, y: y0 + side },
-            Coord { x: x0, y: y0 + side },
+            Coord {
+                x: x0 + side,
+                y: y0,
+            },
+            Coord {
+                x: x0 + side,
+                y: y0 + side,
+            },
+            Coord {
+                x: x0,
+                y: y0 + side,
+            },
         ]
     }
 

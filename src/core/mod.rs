@@ -20,6 +20,7 @@ pub mod outline;
 pub mod params;
 pub mod rank;
 pub mod refine;
+pub mod score;
 pub mod snake;
 
 use geo::{Coord, MultiPolygon, Polygon};
@@ -27,6 +28,7 @@ use serde::Serialize;
 use std::fmt;
 
 pub use params::{LoadModel, Params};
+pub use score::score;
 
 /// One input region: a unique id and its (multi)polygon in a planar CRS.
 #[derive(Clone, Debug)]

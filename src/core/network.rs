@@ -276,7 +276,11 @@ mod tests {
 
     #[test]
     fn adjacent_pairs_become_beams() {
-        let rings = vec![ring(&[(0.0, 0.0), (4.0, 0.0), (4.0, 1.0), (0.0, 1.0)], 0, false)];
+        let rings = vec![ring(
+            &[(0.0, 0.0), (4.0, 0.0), (4.0, 1.0), (0.0, 1.0)],
+            0,
+            false,
+        )];
         let centroids = [
             Coord { x: 0.5, y: 0.5 },
             Coord { x: 1.5, y: 0.5 },

@@ -6,8 +6,8 @@ use super::geometry::{nearest_on_segment, point_segment_distance2, segments_inte
 use super::Params;
 use geo::orient::{Direction, Orient};
 use geo::{
-    Area, Centroid, Contains, Coord, InteriorPoint, LineString, MultiPolygon, Point,
-    Polygon, SimplifyVw, SimplifyVwPreserve,
+    Area, Centroid, Contains, Coord, InteriorPoint, LineString, MultiPolygon, Point, Polygon,
+    SimplifyVw, SimplifyVwPreserve,
 };
 use rstar::{RTree, RTreeObject, AABB};
 
@@ -54,7 +54,10 @@ pub fn prepare(regions: &[&MultiPolygon<f64>], params: &Params) -> Prepared {
         .max(4 * rings_of(&union).len());
     let rings = rings_of(&simplify(&union, target, params.simplify_tolerance));
     let index = RingIndex::new(&coords_of(&rings));
-    let centroids = centroids.into_iter().map(|c| move_inside(c, &index)).collect();
+    let centroids = centroids
+        .into_iter()
+        .map(|c| move_inside(c, &index))
+        .collect();
     Prepared {
         centroids,
         adjacency,
@@ -120,8 +123,14 @@ fn adjacency(regions: &[&MultiPolygon<f64>], point_adjacency: bool) -> Vec<(usiz
     for e in &edges {
         let env = e.envelope();
         let search = AABB::from_corners(
-            [env.lower()[0] - TOUCH_TOLERANCE, env.lower()[1] - TOUCH_TOLERANCE],
-            [env.upper()[0] + TOUCH_TOLERANCE, env.upper()[1] + TOUCH_TOLERANCE],
+            [
+                env.lower()[0] - TOUCH_TOLERANCE,
+                env.lower()[1] - TOUCH_TOLERANCE,
+            ],
+            [
+                env.upper()[0] + TOUCH_TOLERANCE,
+                env.upper()[1] + TOUCH_TOLERANCE,
+            ],
         );
         for f in tree.locate_in_envelope_intersecting(&search) {
             if f.region <= e.region || !touches(e, f) {
@@ -293,7 +302,11 @@ pub fn polygons_of(rings: &[Ring]) -> MultiPolygon<f64> {
     };
     let polygons = (0..parts).filter_map(|part| {
         let exterior = rings.iter().find(|r| r.part == part && !r.hole)?;
-        let holes = rings.iter().filter(|r| r.part == part && r.hole).map(closed).collect();
+        let holes = rings
+            .iter()
+            .filter(|r| r.part == part && r.hole)
+            .map(closed)
+            .collect();
         Some(Polygon::new(closed(exterior), holes))
     });
     MultiPolygon(polygons.collect())
@@ -318,7 +331,10 @@ fn move_inside(c: Coord<f64>, index: &RingIndex) -> Coord<f64> {
     } else {
         let t = segment.b - segment.a;
         let n = (t.x * t.x + t.y * t.y).sqrt().max(1e-300);
-        Coord { x: -t.y / n, y: t.x / n }
+        Coord {
+            x: -t.y / n,
+            y: t.x / n,
+        }
     };
     let mut margin = INSIDE_MARGIN;
     while margin > 1e-9 {
@@ -337,7 +353,9 @@ mod tests {
     use geo::polygon;
 
     fn square(x: f64, y: f64) -> MultiPolygon<f64> {
-        MultiPolygon(vec![polygon![(x: x, y: y), (x: x + 1.0, y: y), (x: x + 1.0, y: y + 1.0), (x: x, y: y + 1.0)]])
+        MultiPolygon(vec![
+            polygon![(x: x, y: y), (x: x + 1.0, y: y), (x: x + 1.0, y: y + 1.0), (x: x, y: y + 1.0)],
+        ])
     }
 
     #[test]
@@ -364,10 +382,28 @@ mod tests {
     #[test]
     fn small_holes_are_filled_and_empty_parts_dropped() {
         let holed = MultiPolygon(vec![Polygon::new(
-            LineString::from(vec![(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0), (0.0, 0.0)]),
+            LineString::from(vec![
+                (0.0, 0.0),
+                (4.0, 0.0),
+                (4.0, 4.0),
+                (0.0, 4.0),
+                (0.0, 0.0),
+            ]),
             vec![
-                LineString::from(vec![(0.5, 0.5), (0.7, 0.5), (0.7, 0.7), (0.5, 0.7), (0.5, 0.5)]),
-                LineString::from(vec![(2.0, 2.0), (3.0, 2.0), (3.0, 3.0), (2.0, 3.0), (2.0, 2.0)]),
+                LineString::from(vec![
+                    (0.5, 0.5),
+                    (0.7, 0.5),
+                    (0.7, 0.7),
+                    (0.5, 0.7),
+                    (0.5, 0.5),
+                ]),
+                LineString::from(vec![
+                    (2.0, 2.0),
+                    (3.0, 2.0),
+                    (3.0, 3.0),
+                    (2.0, 3.0),
+                    (2.0, 2.0),
+                ]),
             ],
         )]);
         let mut island = square(10.0, 10.0);

@@ -111,26 +111,36 @@ impl Params {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(format!("parameter {name} must be a finite number > 0, got {v}"))
+                Err(format!(
+                    "parameter {name} must be a finite number > 0, got {v}"
+                ))
             }
         }
         fn non_negative(name: &str, v: f64) -> Result<(), String> {
             if v.is_finite() && v >= 0.0 {
                 Ok(())
             } else {
-                Err(format!("parameter {name} must be a finite number >= 0, got {v}"))
+                Err(format!(
+                    "parameter {name} must be a finite number >= 0, got {v}"
+                ))
             }
         }
         positive("alpha", self.alpha)?;
         positive("beta", self.beta)?;
         positive("force_cap", self.force_cap)?;
         if self.force_cap > 1.0 {
-            return Err(format!("parameter force_cap must be at most 1 cell, got {}", self.force_cap));
+            return Err(format!(
+                "parameter force_cap must be at most 1 cell, got {}",
+                self.force_cap
+            ));
         }
         positive("epsilon", self.epsilon)?;
         positive("step_ratio", self.step_ratio)?;
         if self.step_ratio < 1.0 {
-            return Err(format!("parameter step_ratio must be >= 1, got {}", self.step_ratio));
+            return Err(format!(
+                "parameter step_ratio must be >= 1, got {}",
+                self.step_ratio
+            ));
         }
         positive("spring", self.spring)?;
         positive("vertices_per_region", self.vertices_per_region)?;
@@ -143,14 +153,18 @@ impl Params {
         for s in &self.shifts {
             for v in s {
                 if !(v.is_finite() && (0.0..1.0).contains(v)) {
-                    return Err(format!("parameter shifts: each shift must be in [0, 1), got {v}"));
+                    return Err(format!(
+                        "parameter shifts: each shift must be in [0, 1), got {v}"
+                    ));
                 }
             }
         }
         for &n in &self.noise_levels {
             non_negative("noise_levels", n)?;
             if n > 1.0 {
-                return Err(format!("parameter noise_levels: each level must be at most 1, got {n}"));
+                return Err(format!(
+                    "parameter noise_levels: each level must be at most 1, got {n}"
+                ));
             }
         }
         for &w in &self.topsis_weights {
@@ -217,9 +231,13 @@ impl Params {
                     .map_err(|_| bad("expected a whole number >= 0"))?,
             ),
             Value::Number(_) | Value::Null => number(text)?,
-            Value::Array(items) if matches!(items.first(), Some(Value::Array(_))) || name == "shifts" => {
+            Value::Array(items)
+                if matches!(items.first(), Some(Value::Array(_))) || name == "shifts" =>
+            {
                 let pairs = text.split(',').map(|pair| {
-                    let (x, y) = pair.split_once(':').ok_or_else(|| bad("expected x:y pairs"))?;
+                    let (x, y) = pair
+                        .split_once(':')
+                        .ok_or_else(|| bad("expected x:y pairs"))?;
                     Ok(Value::Array(vec![number(x)?, number(y)?]))
                 });
                 Value::Array(pairs.collect::<Result<_, String>>()?)

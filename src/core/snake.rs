@@ -125,10 +125,15 @@ impl<'a> BeamSolver<'a> {
     }
 
     /// Solves K·D = F for both axes at once and returns each node's displacement.
-    fn solve(&mut self, positions: &[Coord<f64>], forces: &Forces) -> Result<Vec<Coord<f64>>, Error> {
+    fn solve(
+        &mut self,
+        positions: &[Coord<f64>],
+        forces: &Forces,
+    ) -> Result<Vec<Coord<f64>>, Error> {
         let n = positions.len();
         let dofs = 2 * n;
-        let mut entries: Vec<Triplet<usize, usize, f64>> = Vec::with_capacity(16 * self.network.edges.len() + n);
+        let mut entries: Vec<Triplet<usize, usize, f64>> =
+            Vec::with_capacity(16 * self.network.edges.len() + n);
         let mut load = Mat::<f64>::zeros(dofs, 2);
         let mut diagonal_sum = 0.0;
         let force = |i: usize| forces.vectors.get(i).copied().unwrap_or_default();
@@ -244,7 +249,11 @@ fn scale_step(mut d: Vec<Coord<f64>>, forces: &Forces, ratio: f64) -> Vec<Coord<
 /// the nearest other node (so a long segment cannot sweep over a centroid or a vertex). Two things that are
 /// `d` apart then close by at most 2d/3. The result is checked anyway, and the step halved up to
 /// `HALVINGS` times while it is invalid. `None` when no valid step was found.
-fn apply_valid_step(network: &Network, positions: &[Coord<f64>], mut step: Vec<Coord<f64>>) -> Option<Vec<Coord<f64>>> {
+fn apply_valid_step(
+    network: &Network,
+    positions: &[Coord<f64>],
+    mut step: Vec<Coord<f64>>,
+) -> Option<Vec<Coord<f64>>> {
     let m = network.centroids;
     let rings = network.ring_coords(positions);
     let index = RingIndex::new(&rings);
@@ -262,11 +271,15 @@ fn apply_valid_step(network: &Network, positions: &[Coord<f64>], mut step: Vec<C
         let segment_clearance: Vec<f64> = (0..len)
             .map(|k| {
                 let ends = [ring.nodes[k], ring.nodes[(k + 1) % len]];
-                segment_to_points(rings[r][k], rings[r][(k + 1) % len], &points, |n| ends.contains(&n))
+                segment_to_points(rings[r][k], rings[r][(k + 1) % len], &points, |n| {
+                    ends.contains(&n)
+                })
             })
             .collect();
         for (k, &node) in ring.nodes.iter().enumerate() {
-            let own = |s: &super::geometry::Segment| s.ring == r && (s.index == k || (s.index + 1) % len == k);
+            let own = |s: &super::geometry::Segment| {
+                s.ring == r && (s.index == k || (s.index + 1) % len == k)
+            };
             let clearance = index
                 .distance(positions[node], own)
                 .min(segment_clearance[k])
@@ -316,7 +329,10 @@ fn segment_to_points(
         if skip(p.data) {
             continue;
         }
-        let at = Coord { x: p.geom()[0], y: p.geom()[1] };
+        let at = Coord {
+            x: p.geom()[0],
+            y: p.geom()[1],
+        };
         best = best.min(point_segment_distance2(at, a, b).sqrt());
     }
     best
