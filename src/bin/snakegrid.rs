@@ -1,0 +1,416 @@
+//! `snakegrid [options] DST SRC [SRC_LAYER]`: a grid map from any polygon layer GDAL reads, in
+//! the style of ogr2ogr (single-dash long options such as `-nln`, `-overwrite`, `-where`).
+
+use clap::{Arg, ColorChoice, Command, CommandFactory, FromArgMatches, Parser};
+use snakegrid::io::{self, Job};
+use snakegrid::Params;
+use std::ffi::OsString;
+use std::io::Write;
+use std::process::ExitCode;
+use std::sync::Mutex;
+
+/// Make a grid map (tile map): one equal square cell per region, placed so that cells stay near
+/// their regions, neighbours stay neighbours, directions hold and the whole keeps the map's
+/// outline (the snake model of Wei, Yang, Xu and Ding, 2024, with an adjacency-aware refinement).
+///
+/// The output layer has every source field, then grid_col and grid_row (the cell, from the top
+/// left), cell_disp (distance from the region to its cell, in cells), nbr_kept (share of the
+/// region's neighbours kept) and orient_err (mean direction error to its neighbours, degrees).
+#[derive(Parser, Debug)]
+#[command(name = "snakegrid", color = ColorChoice::Never, max_term_width = 100)]
+struct Cli {
+    /// Destination dataset, a file or folder (must not exist, unless -overwrite)
+    #[arg(value_name = "DST")]
+    dst: String,
+    /// Source dataset: file, folder or connection string
+    #[arg(value_name = "SRC")]
+    src: String,
+    /// Source layer [default: the first layer]
+    #[arg(value_name = "SRC_LAYER")]
+    src_layer: Option<String>,
+    /// Output format, a GDAL vector driver short name [default: from DST's extension, else GPKG]
+    #[arg(short = 'f', value_name = "FORMAT", allow_hyphen_values = true)]
+    format: Option<String>,
+    /// Name of the output layer [default: the source layer's name]
+    #[arg(long = "nln", value_name = "NAME", allow_hyphen_values = true)]
+    nln: Option<String>,
+    /// Replace DST (and the -json and -svg files) if they exist, once the run has succeeded
+    #[arg(long = "overwrite")]
+    overwrite: bool,
+    /// Only the features matching this OGR SQL attribute filter
+    #[arg(long = "where", value_name = "EXPR", allow_hyphen_values = true)]
+    where_clause: Option<String>,
+    /// Field with each region's unique id (any type) [default: the feature id]
+    #[arg(long = "id", value_name = "FIELD", allow_hyphen_values = true)]
+    id: Option<String>,
+    /// Working and output CRS, any definition GDAL accepts [default: the source CRS; a geographic
+    /// source is projected to Lambert azimuthal equal-area centred on the layer]
+    #[arg(long = "t_srs", value_name = "CRS", allow_hyphen_values = true)]
+    t_srs: Option<String>,
+    /// Write a machine-readable report (parameters, metrics, Snake run, candidates, regions)
+    #[arg(long = "json", value_name = "FILE", allow_hyphen_values = true)]
+    json: Option<String>,
+    /// Write a picture of the source map and the grid map side by side
+    #[arg(long = "svg", value_name = "FILE", allow_hyphen_values = true)]
+    svg: Option<String>,
+    /// Short name field for the cells of the -svg picture [default: abbr, else name, else the id]
+    #[arg(long = "label", value_name = "FIELD", allow_hyphen_values = true)]
+    label: Option<String>,
+    /// Quiet: no progress line and no summary
+    #[arg(short = 'q', long = "quiet")]
+    quiet: bool,
+}
+
+const PARAMETERS: &str = "Method parameters (method.md; lengths in cells)";
+
+/// What each method parameter does, for --help. A parameter missing here is still offered (with
+/// a generic text); the test below makes sure none is.
+fn describe(name: &str) -> &'static str {
+    match name {
+        "alpha" => "Beam elasticity α (resistance to stretching), > 0",
+        "beta" => "Beam rigidity β (resistance to bending), > 0",
+        "force_cap" => "Force cap T_f in cells, (0, 1]",
+        "epsilon" => "The Snake stops when no node moves more than this (cells), > 0",
+        "max_steps" => "Most Snake steps T_s; 0 switches the Snake off",
+        "step_ratio" => "No node moves more than R times the largest force in a step, >= 1",
+        "spring" => "Weak spring κ as a fraction of the mean stiffness, > 0",
+        "stop_on_no_progress" => "Stop when the largest force has not fallen for 3 steps",
+        "load_model" => "How forces become loads: nodal or element",
+        "vertices_per_region" => "Outline vertices kept per region by the simplification, > 0",
+        "simplify_tolerance" => {
+            "Simplification tolerance in cells² (overrides vertices_per_region), or none"
+        }
+        "point_adjacency" => "Regions touching at a single point count as adjacent",
+        "shifts" => "Lattice origin shifts x:y as fractions of a cell, one candidate each",
+        "noise_levels" => "Noise levels MD of the noisy candidates, comma-separated",
+        "seed" => "Seed of every random choice",
+        "topsis_weights" => "TOPSIS weights of location, adjacency, orientation, shape",
+        "refine" => "Adjacency-aware refinement after the assignment",
+        "refine_moves" => "Simulated-annealing moves of the refinement",
+        "refine_temperature" => "Starting temperature of the refinement",
+        "refine_w_adjacent" => "Refinement weight of a neighbour pair whose cells do not touch",
+        "refine_w_angle" => "Refinement weight of a pair's direction error, per 90°",
+        "refine_w_misdirected" => "Refinement weight of a pair misdirected by more than 45°",
+        "refine_w_location" => "Refinement weight of a region's squared distance to its cell",
+        "refine_cell_ratio" => "Free cells offered to the refinement, as a multiple of the regions",
+        "refine_swap_only_below" => "Up to this many regions the refinement only swaps cells",
+        _ => "Method parameter (see method.md)",
+    }
+}
+
+/// A parameter's default as text that `Params::set` reads back.
+fn default_text(value: &serde_json::Value) -> String {
+    use serde_json::Value;
+    match value {
+        Value::Null => "none".into(),
+        Value::String(s) => s.clone(),
+        Value::Array(items) => items
+            .iter()
+            .map(|item| match item {
+                Value::Array(pair) => pair.iter().map(default_text).collect::<Vec<_>>().join(":"),
+                other => default_text(other),
+            })
+            .collect::<Vec<_>>()
+            .join(","),
+        other => other.to_string(),
+    }
+}
+
+/// The command: the options above plus one `-name VALUE` option per method parameter.
+fn command() -> Command {
+    // Without clap's "string" feature, names and texts built at run time must be 'static; they
+    // are made once, at start-up, and live as long as the program anyway.
+    let version: &'static str = format!(
+        "{} (GDAL {})",
+        env!("CARGO_PKG_VERSION"),
+        gdal::version::version_info("RELEASE_NAME")
+    )
+    .leak();
+    let defaults = serde_json::to_value(Params::default()).unwrap_or_default();
+    let parameters = Params::names().into_iter().map(|name| {
+        let default = defaults.get(&name).map(default_text).unwrap_or_default();
+        let help = format!("{} [default: {default}]", describe(&name));
+        let name: &'static str = name.leak();
+        Arg::new(name)
+            .long(name)
+            .value_name("VALUE")
+            .allow_hyphen_values(true)
+            .help(help)
+            .help_heading(PARAMETERS)
+    });
+    Cli::command().version(version).args(parameters).after_help(
+        "Long options may be written with one dash, as in ogr2ogr: -nln, -overwrite, -where, \
+             -alpha 2.\nExit status: 0 on success, 1 on error, 2 on a usage error; on error no \
+             output is left behind.",
+    )
+}
+
+/// ogr2ogr spells long options with one dash (`-nln`); clap wants two. Every `-word` becomes
+/// `--word` (an unknown one too, so clap names it instead of reading `-foo` as `-f oo`); values
+/// of options that take one are passed through untouched, even when they start with a dash.
+fn ogr_style(args: Vec<OsString>, command: &Command) -> Vec<OsString> {
+    let takes_value = |name: &str| {
+        command.get_arguments().any(|a| {
+            (a.get_long() == Some(name) || a.get_short().is_some_and(|s| name == s.to_string()))
+                && a.get_action().takes_values()
+        })
+    };
+    let mut out = Vec::with_capacity(args.len());
+    let mut args = args.into_iter();
+    out.extend(args.next()); // the program name
+    while let Some(arg) = args.next() {
+        let Some(text) = arg.to_str() else {
+            out.push(arg);
+            continue;
+        };
+        if text == "--" {
+            out.push(arg);
+            out.extend(args);
+            break;
+        }
+        let (spelled, word) = match text.strip_prefix("--") {
+            Some(word) => (arg.clone(), word),
+            None => match text.strip_prefix('-') {
+                Some(word)
+                    if word.chars().count() > 1
+                        && !word.starts_with(|c: char| c.is_ascii_digit() || c == '.') =>
+                {
+                    (OsString::from(format!("-{text}")), word)
+                }
+                Some(word) => (arg.clone(), word),
+                None => {
+                    out.push(arg);
+                    continue;
+                }
+            },
+        };
+        out.push(spelled);
+        if !word.contains('=') && takes_value(word) {
+            out.extend(args.next());
+        }
+    }
+    out
+}
+
+/// clap's error as one line, in the user's spelling: "unexpected argument '-foo' found".
+fn one_line(error: &clap::Error, original: &[OsString]) -> String {
+    let rendered = error.render().to_string();
+    let mut line = rendered
+        .lines()
+        .map(str::trim)
+        .take_while(|l| !l.starts_with("Usage:"))
+        .filter(|l| !l.is_empty() && !l.starts_with("tip:"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    line = line.trim_start_matches("error:").trim().to_owned();
+    for arg in original.iter().filter_map(|a| a.to_str()) {
+        if arg.starts_with('-') && !arg.starts_with("--") {
+            line = line.replace(&format!("'-{arg}'"), &format!("'{arg}'"));
+        }
+    }
+    line
+}
+
+/// GDAL's progress line, "0...10...20...30...40...50...60...70...80...90...100 - done.", on
+/// stderr: 40 ticks, a number every 4. Fractions come from worker threads, possibly out of
+/// order: the line only ever moves forward.
+struct TermProgress {
+    /// Ticks printed so far; -1 before the first.
+    ticks: Mutex<i32>,
+}
+
+impl TermProgress {
+    fn update(&self, fraction: f64) -> bool {
+        // The lock is held while printing, or two threads could print their parts swapped.
+        let mut ticks = self
+            .ticks
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let text = advance(&mut ticks, fraction);
+        if !text.is_empty() {
+            let mut err = std::io::stderr().lock();
+            let _ = err.write_all(text.as_bytes());
+            let _ = err.flush();
+        }
+        true
+    }
+
+    /// Ends an unfinished line, so that an error message starts on its own.
+    fn interrupt(&self) {
+        let ticks = *self
+            .ticks
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        if (0..40).contains(&ticks) {
+            eprintln!();
+        }
+    }
+}
+
+/// The text that takes the line from `ticks` printed to `fraction` (empty when it is there).
+fn advance(ticks: &mut i32, fraction: f64) -> String {
+    let mut text = String::new();
+    if !fraction.is_finite() {
+        return text;
+    }
+    let target = (fraction.clamp(0.0, 1.0) * 40.0).floor() as i32;
+    while *ticks < target {
+        *ticks += 1;
+        if *ticks % 4 == 0 {
+            text += &(*ticks / 4 * 10).to_string();
+        } else {
+            text.push('.');
+        }
+        if *ticks == 40 {
+            text += " - done.\n";
+        }
+    }
+    text
+}
+
+fn usage_error(message: &str) -> ExitCode {
+    eprintln!("snakegrid: ERROR: {message} (see --help)");
+    ExitCode::from(2)
+}
+
+fn main() -> ExitCode {
+    let command = command();
+    let original: Vec<OsString> = std::env::args_os().collect();
+    let matches = match command
+        .clone()
+        .try_get_matches_from(ogr_style(original.clone(), &command))
+    {
+        Ok(matches) => matches,
+        Err(e)
+            if matches!(
+                e.kind(),
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
+            ) =>
+        {
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => return usage_error(&one_line(&e, &original)),
+    };
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(&one_line(&e, &original)),
+    };
+    let mut params = Params::default();
+    for name in Params::names() {
+        if let Some(value) = matches.get_one::<String>(&name) {
+            if let Err(message) = params.set(&name, value) {
+                return usage_error(&message);
+            }
+        }
+    }
+    let job = Job {
+        src: cli.src,
+        src_layer: cli.src_layer,
+        where_clause: cli.where_clause,
+        id_field: cli.id,
+        dst: cli.dst,
+        format: cli.format,
+        layer_name: cli.nln,
+        overwrite: cli.overwrite,
+        target_srs: cli.t_srs,
+        json_report: cli.json,
+        svg: cli.svg,
+        label_field: cli.label,
+    };
+    let progress = TermProgress {
+        ticks: Mutex::new(-1),
+    };
+    let quiet = cli.quiet;
+    let result = io::run(&job, &params, &|fraction, _| {
+        quiet || progress.update(fraction)
+    });
+    match result {
+        Ok(outcome) => {
+            if !quiet {
+                print!("{}", io::summary(&job, &outcome));
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            progress.interrupt();
+            eprintln!("snakegrid: ERROR: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(list: &[&str]) -> Vec<OsString> {
+        list.iter().map(OsString::from).collect()
+    }
+
+    #[test]
+    fn every_parameter_is_described_and_the_command_is_consistent() {
+        command().debug_assert();
+        for name in Params::names() {
+            assert_ne!(
+                describe(&name),
+                describe(""),
+                "no help text for parameter {name}"
+            );
+        }
+    }
+
+    #[test]
+    fn single_dash_long_options_become_double_dash_and_values_stay() {
+        let command = command();
+        let out = ogr_style(
+            args(&[
+                "snakegrid",
+                "-nln",
+                "-odd",
+                "-overwrite",
+                "-f",
+                "GPKG",
+                "-alpha",
+                "-1",
+                "-q",
+                "out.gpkg",
+                "-where=x",
+                "--",
+                "-src",
+            ]),
+            &command,
+        );
+        assert_eq!(
+            out,
+            args(&[
+                "snakegrid",
+                "--nln",
+                "-odd",
+                "--overwrite",
+                "-f",
+                "GPKG",
+                "--alpha",
+                "-1",
+                "-q",
+                "out.gpkg",
+                "--where=x",
+                "--",
+                "-src"
+            ])
+        );
+    }
+
+    #[test]
+    fn the_progress_line_is_gdals() {
+        let mut ticks = -1;
+        let text: String = [0.0, 0.5, 0.3, f64::NAN, 0.99, 1.0, 1.0]
+            .into_iter()
+            .map(|f| advance(&mut ticks, f))
+            .collect();
+        assert_eq!(
+            text,
+            "0...10...20...30...40...50...60...70...80...90...100 - done.\n"
+        );
+    }
+}

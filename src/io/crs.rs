@@ -1,0 +1,161 @@
+//! The working CRS: the method is planar, so a geographic layer is projected to a Lambert
+//! azimuthal equal-area CRS centred on it (or to `-t_srs`), and the run says so.
+
+use super::session::Session;
+use crate::core::Error;
+use gdal::spatial_ref::{AxisMappingStrategy, CoordTransform, SpatialRef};
+
+/// Where the regions are laid out and how to get there from the source.
+pub(crate) struct Plan {
+    /// The CRS of the regions handed to the core and of the output; `None` when the source has
+    /// none (its coordinates are taken as planar).
+    pub working: Option<SpatialRef>,
+    /// Source → working, when they differ.
+    pub transform: Option<CoordTransform>,
+    /// What the user should know about it.
+    pub note: Option<String>,
+}
+
+/// Lon/lat bounds of a geographic layer: (min lon, min lat, max lon, max lat).
+pub(crate) type Bounds = (f64, f64, f64, f64);
+
+/// Decides the working CRS. `bounds` is asked for only when the source is geographic and no
+/// target was given, to centre the automatic projection.
+pub(crate) fn plan(
+    session: &Session,
+    source: Option<&SpatialRef>,
+    target: Option<&str>,
+    bounds: impl FnOnce() -> Option<Bounds>,
+) -> Result<Plan, Error> {
+    // GeoPackage stores "no CRS" as one of two placeholder CRSs, which GDAL reads back as real
+    // ones ("Undefined geographic SRS" would otherwise send planar data to a projection).
+    let placeholder = source
+        .and_then(|s| s.name())
+        .filter(|name| name.starts_with("Undefined") && name.ends_with("SRS"));
+    let source = source.filter(|_| placeholder.is_none());
+    match (source, target) {
+        (None, None) => Ok(Plan {
+            working: None,
+            transform: None,
+            note: Some(match placeholder {
+                Some(name) => format!(
+                    "the source has no CRS (only the placeholder {name:?}): its coordinates \
+                     are taken as planar"
+                ),
+                None => "the source has no CRS: its coordinates are taken as planar".into(),
+            }),
+        }),
+        (None, Some(target)) => Err(Error::InvalidInput {
+            feature: None,
+            message: format!("the source has no CRS, so it cannot be projected to -t_srs {target}"),
+        }),
+        (Some(source), Some(target)) => {
+            let working = parse(session, target)?;
+            let mut note = format!(
+                "projected from {} to {} (-t_srs)",
+                describe(source),
+                describe(&working)
+            );
+            if working.is_geographic() {
+                note.push_str("; the working CRS is geographic, so cells are squares in degrees");
+            }
+            Ok(Plan {
+                transform: Some(transform(session, source, &working)?),
+                working: Some(working),
+                note: Some(note),
+            })
+        }
+        (Some(source), None) if source.is_geographic() => {
+            let (min_lon, min_lat, max_lon, max_lat) = bounds().ok_or_else(|| {
+                Error::input(
+                    None,
+                    "the layer has no coordinates to centre a projection on",
+                )
+            })?;
+            if min_lat < -90.0 || max_lat > 90.0 || min_lon < -540.0 || max_lon > 540.0 {
+                return Err(Error::input(
+                    None,
+                    format!(
+                        "the source CRS {} is geographic, but the coordinates are not longitudes \
+                         and latitudes (x {min_lon} to {max_lon}, y {min_lat} to {max_lat}): the \
+                         layer's CRS is wrong",
+                        describe(source)
+                    ),
+                ));
+            }
+            let (lon, lat) = ((min_lon + max_lon) / 2.0, (min_lat + max_lat) / 2.0);
+            // Six decimals (about 0.1 m) keep the definition short and stable.
+            let definition = format!(
+                "+proj=laea +lat_0={lat:.6} +lon_0={lon:.6} +datum=WGS84 +units=m +no_defs"
+            );
+            let working = parse(session, &definition)?;
+            Ok(Plan {
+                transform: Some(transform(session, source, &working)?),
+                note: Some(format!(
+                    "the source CRS {} is geographic: projected to Lambert azimuthal equal-area \
+                     centred on the layer ({definition})",
+                    describe(source)
+                )),
+                working: Some(working),
+            })
+        }
+        (Some(source), None) => Ok(Plan {
+            working: Some(source.clone()),
+            transform: None,
+            note: None,
+        }),
+    }
+}
+
+/// A CRS from any definition GDAL accepts (EPSG code, WKT, PROJ string, file), with the
+/// traditional GIS axis order (x = easting or longitude).
+pub(crate) fn parse(session: &Session, definition: &str) -> Result<SpatialRef, Error> {
+    let mut srs = SpatialRef::from_definition(definition)
+        .map_err(|e| session.io_error(&format!("invalid CRS {definition:?}"), e))?;
+    srs.set_axis_mapping_strategy(AxisMappingStrategy::TraditionalGisOrder);
+    Ok(srs)
+}
+
+/// The layer's CRS with the traditional GIS axis order, which GDAL 3 does not give EPSG:4326 by
+/// default (it would swap latitude and longitude).
+pub(crate) fn traditional(mut srs: SpatialRef) -> SpatialRef {
+    srs.set_axis_mapping_strategy(AxisMappingStrategy::TraditionalGisOrder);
+    srs
+}
+
+fn transform(
+    session: &Session,
+    from: &SpatialRef,
+    to: &SpatialRef,
+) -> Result<CoordTransform, Error> {
+    CoordTransform::new(from, to).map_err(|e| {
+        session.io_error(
+            &format!(
+                "cannot transform from {} to {}",
+                describe(from),
+                describe(to)
+            ),
+            e,
+        )
+    })
+}
+
+/// A short readable name: `EPSG:5070 (NAD83 / Conus Albers)`, else the CRS's name, else its
+/// PROJ string.
+pub(crate) fn describe(srs: &SpatialRef) -> String {
+    let name = srs
+        .name()
+        .filter(|n| !n.is_empty() && n != "unknown" && n != "unnamed");
+    let authority = srs.auth_name().zip(srs.auth_code().ok());
+    match (authority, name) {
+        (Some((auth, code)), Some(name)) => format!("{auth}:{code} ({name})"),
+        (Some((auth, code)), None) => format!("{auth}:{code}"),
+        (None, name) => srs
+            .to_proj4()
+            .ok()
+            .map(|p| p.trim().to_owned())
+            .filter(|p| !p.is_empty())
+            .or(name)
+            .unwrap_or_else(|| "an unnamed CRS".into()),
+    }
+}

@@ -1,0 +1,271 @@
+//! Reading the regions of one layer: open any OGR source, pick the layer, apply `-where`, and
+//! turn each feature into a [`Region`], refusing (and naming) what the method cannot use.
+
+use super::crs::Bounds;
+use super::session::Session;
+use crate::core::{Error, Region};
+use gdal::spatial_ref::CoordTransform;
+use gdal::vector::{Feature, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
+use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
+use geo::{CoordsIter, MultiPolygon};
+use std::collections::HashMap;
+use std::path::Path;
+
+pub(crate) fn open(session: &Session, src: &str) -> Result<Dataset, Error> {
+    let options = DatasetOptions {
+        // Verbose errors make GDAL say why (no such file, not recognised) instead of nothing.
+        open_flags: GdalOpenFlags::GDAL_OF_VECTOR
+            | GdalOpenFlags::GDAL_OF_READONLY
+            | GdalOpenFlags::GDAL_OF_VERBOSE_ERROR,
+        ..Default::default()
+    };
+    Dataset::open_ex(src, options).map_err(|e| {
+        if !src.contains(':') && !Path::new(src).exists() {
+            Error::Io(format!(
+                "cannot open source {src:?}: no such file or directory"
+            ))
+        } else {
+            session.io_error(&format!("cannot open source {src:?}"), e)
+        }
+    })
+}
+
+/// The named layer, or the first.
+pub(crate) fn layer<'d>(dataset: &'d Dataset, name: Option<&str>) -> Result<Layer<'d>, Error> {
+    let names = || {
+        let all: Vec<String> = dataset.layers().map(|l| l.name()).collect();
+        if all.is_empty() {
+            "it has no layers".to_owned()
+        } else {
+            format!("its layers: {}", all.join(", "))
+        }
+    };
+    match name {
+        Some(name) => dataset.layer_by_name(name).map_err(|_| {
+            Error::input(
+                None,
+                format!("the source has no layer named {name:?} ({})", names()),
+            )
+        }),
+        None => dataset
+            .layer(0)
+            .map_err(|_| Error::input(None, "the source has no layers")),
+    }
+}
+
+/// The index of field `name` (exact, else the only case-insensitive match).
+pub(crate) fn field_index(fields: &[String], name: &str) -> Option<usize> {
+    fields.iter().position(|f| f == name).or_else(|| {
+        let mut matches = fields
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.eq_ignore_ascii_case(name));
+        match (matches.next(), matches.next()) {
+            (Some((i, _)), None) => Some(i),
+            _ => None,
+        }
+    })
+}
+
+/// A required field, or an error that lists the layer's fields.
+pub(crate) fn require_field(fields: &[String], name: &str, option: &str) -> Result<usize, Error> {
+    field_index(fields, name).ok_or_else(|| {
+        Error::input(
+            None,
+            format!(
+                "{option} {name:?}: the source layer has no such field (its fields: {})",
+                if fields.is_empty() {
+                    "none".to_owned()
+                } else {
+                    fields.join(", ")
+                }
+            ),
+        )
+    })
+}
+
+/// Every feature that passes `-where`, in the layer's order. They are kept for the writer,
+/// which copies their attributes.
+pub(crate) fn features<'l>(
+    session: &Session,
+    layer: &'l mut Layer,
+    where_clause: Option<&str>,
+) -> Result<Vec<Feature<'l>>, Error> {
+    let what = match where_clause {
+        Some(expression) => format!("invalid -where expression {expression:?}"),
+        None => "cannot read the source layer".to_owned(),
+    };
+    if let Some(expression) = where_clause {
+        layer
+            .set_attribute_filter(expression)
+            .map_err(|e| session.io_error(&what, e))?;
+    }
+    // Some drivers (GeoPackage) check a filter only when reading, and a read error ends the
+    // iteration like the end of the layer would: either must fail the run, not shorten it.
+    session.take_error();
+    let features: Vec<Feature<'l>> = layer.features().collect();
+    if let Some(reason) = session.take_error() {
+        return Err(Error::Io(format!("{what}: {reason}")));
+    }
+    if features.is_empty() {
+        return Err(Error::input(
+            None,
+            match where_clause {
+                Some(_) => "no feature passes the -where filter",
+                None => "the source layer has no features",
+            },
+        ));
+    }
+    Ok(features)
+}
+
+/// One feature that passed the checks, before projection.
+pub(crate) struct Checked {
+    pub id: String,
+    pub label: String,
+    /// Polygon or multipolygon, flattened to 2D.
+    pub geometry: Geometry,
+}
+
+/// Ids, labels and polygonal geometries of `features`; refuses null or duplicate ids and
+/// null, empty or non-polygonal geometries, naming the feature.
+pub(crate) fn check(
+    features: &[Feature],
+    id_field: Option<usize>,
+    label_field: Option<usize>,
+) -> Result<Vec<Checked>, Error> {
+    let mut seen: HashMap<String, String> = HashMap::new();
+    features
+        .iter()
+        .enumerate()
+        .map(|(k, feature)| {
+            let fid = match feature.fid() {
+                Some(fid) => format!("FID {fid}"),
+                None => format!("number {}", k + 1),
+            };
+            let id = match id_field {
+                Some(i) => feature.field_as_string(i).ok().flatten(),
+                None => feature.fid().map(|fid| fid.to_string()),
+            }
+            .ok_or_else(|| match id_field {
+                Some(_) => Error::input(Some(&fid), "the id is null"),
+                None => Error::input(
+                    Some(&fid),
+                    "the feature has no FID; name an id field with -id",
+                ),
+            })?;
+            if id.is_empty() {
+                return Err(Error::input(Some(&fid), "the id is empty"));
+            }
+            if let Some(first) = seen.insert(id.clone(), fid.clone()) {
+                return Err(Error::input(
+                    Some(&id),
+                    format!("the id is not unique ({first} and {fid} share it)"),
+                ));
+            }
+            let geometry = polygonal(feature.geometry()).map_err(|m| Error::input(Some(&id), m))?;
+            let label = label_field
+                .and_then(|i| feature.field_as_string(i).ok().flatten())
+                .filter(|l| !l.trim().is_empty())
+                .unwrap_or_else(|| id.clone());
+            Ok(Checked {
+                id,
+                label,
+                geometry,
+            })
+        })
+        .collect()
+}
+
+/// A copy of `geometry` flattened to 2D when it is a non-empty (multi)polygon.
+fn polygonal(geometry: Option<&Geometry>) -> Result<Geometry, String> {
+    // The binding hands out a null geometry as a wrapper of a null pointer, which every other
+    // call would pass to GDAL.
+    // SAFETY: only reads the wrapped pointer, which `Feature::geometry` has just set.
+    let geometry = geometry
+        .filter(|g| !unsafe { g.c_geometry() }.is_null())
+        .ok_or("the geometry is null")?;
+    if geometry.is_empty() {
+        return Err("the geometry is empty".into());
+    }
+    let flat = gdal::vector::geometry_type_flatten(geometry.geometry_type());
+    match flat {
+        OGRwkbGeometryType::wkbPolygon | OGRwkbGeometryType::wkbMultiPolygon => {
+            let mut copy = geometry.clone();
+            copy.flatten_to_2d();
+            Ok(copy)
+        }
+        OGRwkbGeometryType::wkbCurvePolygon | OGRwkbGeometryType::wkbMultiSurface => Err(format!(
+            "curved geometries ({}) are not supported; linearise them first \
+             (ogr2ogr -nlt CONVERT_TO_LINEAR)",
+            geometry.geometry_name()
+        )),
+        _ => Err(format!(
+            "the geometry is a {}, not a polygon or multipolygon",
+            geometry.geometry_name()
+        )),
+    }
+}
+
+/// The bounds of all checked geometries, in source coordinates.
+pub(crate) fn bounds(checked: &[Checked]) -> Option<Bounds> {
+    checked
+        .iter()
+        .map(|c| c.geometry.envelope())
+        .filter(|e| {
+            [e.MinX, e.MinY, e.MaxX, e.MaxY]
+                .iter()
+                .all(|v| v.is_finite())
+        })
+        .map(|e| (e.MinX, e.MinY, e.MaxX, e.MaxY))
+        .reduce(|a, b| (a.0.min(b.0), a.1.min(b.1), a.2.max(b.2), a.3.max(b.3)))
+}
+
+/// The regions in the working CRS, in the order of `checked`.
+pub(crate) fn regions(
+    session: &Session,
+    checked: &[Checked],
+    transform: Option<&CoordTransform>,
+) -> Result<Vec<Region>, Error> {
+    checked
+        .iter()
+        .map(|c| {
+            let projected;
+            let geometry = match transform {
+                Some(t) => {
+                    projected = c.geometry.transform(t).map_err(|e| {
+                        match session.io_error("cannot project the geometry", e) {
+                            Error::Io(message) => Error::input(Some(&c.id), message),
+                            other => other,
+                        }
+                    })?;
+                    &projected
+                }
+                None => &c.geometry,
+            };
+            let geometry = match geometry.to_geo() {
+                Ok(geo::Geometry::Polygon(p)) => MultiPolygon(vec![p]),
+                Ok(geo::Geometry::MultiPolygon(m)) => m,
+                _ => {
+                    return Err(Error::input(
+                        Some(&c.id),
+                        "the geometry cannot be read as polygons",
+                    ))
+                }
+            };
+            if geometry
+                .coords_iter()
+                .any(|p| !(p.x.is_finite() && p.y.is_finite()))
+            {
+                return Err(Error::input(
+                    Some(&c.id),
+                    "the geometry has a NaN or infinite coordinate",
+                ));
+            }
+            Ok(Region {
+                id: c.id.clone(),
+                geometry,
+            })
+        })
+        .collect()
+}

@@ -1,0 +1,267 @@
+//! Where the user finds a run's metrics and parameters: the JSON report (`-json FILE`), the
+//! layer metadata of the output, and the printed summary.
+
+use super::{Job, Outcome};
+use crate::core::{CandidateReport, Error, GridMap, LayoutMetrics, Params, SnakeReport};
+use geo::{BoundingRect, Coord};
+use serde::Serialize;
+
+/// The machine-readable report of one run. Field order is fixed and numbers print in their
+/// shortest exact form, so the same run gives the same bytes.
+#[derive(Serialize)]
+struct Report<'a> {
+    snakegrid: &'static str,
+    gdal: String,
+    source: SourceInfo<'a>,
+    destination: DestinationInfo<'a>,
+    crs: CrsInfo,
+    notes: &'a [String],
+    parameters: &'a Params,
+    /// Side of a cell in working CRS units.
+    cell_size: f64,
+    adjacent_pairs: usize,
+    metrics: &'a LayoutMetrics,
+    snake: &'a SnakeReport,
+    /// Every candidate layout, best (the one written) first.
+    candidates: &'a [CandidateReport],
+    /// One row per region, in input order.
+    regions: Vec<RegionRow<'a>>,
+}
+
+#[derive(Serialize)]
+pub(crate) struct SourceInfo<'a> {
+    pub dataset: &'a str,
+    pub layer: &'a str,
+    #[serde(rename = "where")]
+    pub where_clause: Option<&'a str>,
+    /// The id field, or null for the feature ids.
+    pub id_field: Option<&'a str>,
+    pub label_field: Option<&'a str>,
+    pub features: usize,
+}
+
+#[derive(Serialize)]
+struct DestinationInfo<'a> {
+    dataset: &'a str,
+    layer: &'a str,
+    format: &'a str,
+}
+
+#[derive(Serialize)]
+pub(crate) struct CrsInfo {
+    /// The source layer's CRS (null when it has none).
+    pub source: Option<String>,
+    /// The CRS of the cells and of the output.
+    pub working: Option<String>,
+    /// The working CRS in full, as PROJJSON (WKT1 cannot express every CRS, e.g. Equal Earth).
+    pub working_projjson: Option<serde_json::Value>,
+    /// The regions were projected from the source CRS to the working CRS.
+    pub projected: bool,
+}
+
+#[derive(Serialize)]
+struct RegionRow<'a> {
+    id: &'a str,
+    label: &'a str,
+    col: i32,
+    row: i32,
+    /// In cells, after the fit (method.md §8).
+    displacement: f64,
+    neighbours_kept: f64,
+    /// Degrees.
+    orientation_error: f64,
+    centroid: [f64; 2],
+    moved_centroid: [f64; 2],
+    cell_centre: [f64; 2],
+}
+
+/// The JSON report of a finished run; `labels` are in input order.
+pub(crate) fn json(
+    job: &Job,
+    params: &Params,
+    outcome: &Outcome,
+    source: SourceInfo,
+    crs: CrsInfo,
+    labels: &[String],
+) -> Result<String, Error> {
+    let map = &outcome.map;
+    let report = Report {
+        snakegrid: env!("CARGO_PKG_VERSION"),
+        gdal: gdal::version::version_info("RELEASE_NAME"),
+        source,
+        destination: DestinationInfo {
+            dataset: &job.dst,
+            layer: &outcome.layer,
+            format: &outcome.format,
+        },
+        crs,
+        notes: &outcome.notes,
+        parameters: params,
+        cell_size: map.cell_size,
+        adjacent_pairs: map.adjacency.len(),
+        metrics: &map.metrics,
+        snake: &map.snake,
+        candidates: &map.candidates,
+        regions: rows(map, labels),
+    };
+    serde_json::to_string_pretty(&report)
+        .map(|text| text + "\n")
+        .map_err(|e| Error::Internal(format!("cannot serialise the report: {e}")))
+}
+
+/// The per-region rows of `map`, labelled by `labels` (input order).
+fn rows<'a>(map: &'a GridMap, labels: &'a [String]) -> Vec<RegionRow<'a>> {
+    let xy = |c: Coord<f64>| [c.x, c.y];
+    map.cells
+        .iter()
+        .zip(labels)
+        .map(|(cell, label)| RegionRow {
+            id: &cell.id,
+            label,
+            col: cell.col,
+            row: cell.row,
+            displacement: cell.metrics.displacement,
+            neighbours_kept: cell.metrics.neighbours_kept,
+            orientation_error: cell.metrics.orientation_error,
+            centroid: xy(cell.centroid),
+            moved_centroid: xy(cell.moved_centroid),
+            cell_centre: cell
+                .cell
+                .bounding_rect()
+                .map(|r| xy(r.center()))
+                .unwrap_or([f64::NAN; 2]),
+        })
+        .collect()
+}
+
+/// Layer metadata items: the run's parameters and metrics, for formats that keep them
+/// (GeoPackage stores them in gpkg_metadata; QGIS shows them in the layer's properties).
+pub(crate) fn metadata(
+    job: &Job,
+    layer: &str,
+    params: &Params,
+    map: &GridMap,
+) -> Vec<(String, String)> {
+    let mut items = vec![
+        (
+            "SNAKEGRID_VERSION".to_owned(),
+            env!("CARGO_PKG_VERSION").to_owned(),
+        ),
+        ("SNAKEGRID_SOURCE".to_owned(), job.src.clone()),
+        ("SNAKEGRID_SOURCE_LAYER".to_owned(), layer.to_owned()),
+        (
+            "SNAKEGRID_ID_FIELD".to_owned(),
+            job.id_field.clone().unwrap_or_else(|| "FID".into()),
+        ),
+    ];
+    if let Some(expression) = &job.where_clause {
+        items.push(("SNAKEGRID_WHERE".to_owned(), expression.clone()));
+    }
+    items.push(("SNAKEGRID_CELL_SIZE".to_owned(), map.cell_size.to_string()));
+    // Every metric by its own name, so new metrics appear without touching this list.
+    if let Ok(serde_json::Value::Object(metrics)) = serde_json::to_value(map.metrics) {
+        for (name, value) in metrics {
+            items.push((
+                format!("SNAKEGRID_METRIC_{}", name.to_ascii_uppercase()),
+                value.to_string(),
+            ));
+        }
+    }
+    let snake = &map.snake;
+    items.extend([
+        ("SNAKEGRID_SNAKE_STEPS".to_owned(), snake.steps.to_string()),
+        (
+            "SNAKEGRID_SNAKE_STOP_REASON".to_owned(),
+            snake.stop_reason.as_str().to_owned(),
+        ),
+        (
+            "SNAKEGRID_SNAKE_SPREAD_BEFORE".to_owned(),
+            snake.spread_before.to_string(),
+        ),
+        (
+            "SNAKEGRID_SNAKE_SPREAD_AFTER".to_owned(),
+            snake.spread_after.to_string(),
+        ),
+        (
+            "SNAKEGRID_PARAMETERS".to_owned(),
+            serde_json::to_string(params).unwrap_or_default(),
+        ),
+    ]);
+    items
+}
+
+/// The one-line layer description (GeoPackage's gpkg_contents.description).
+pub(crate) fn description(map: &GridMap) -> String {
+    let m = &map.metrics;
+    format!(
+        "snakegrid {} grid map: C_adjacent {:.3}, C_orientation {:.1} deg, C_location {:.3} cells, C_shape {:.3}",
+        env!("CARGO_PKG_VERSION"),
+        m.adjacent,
+        m.orientation,
+        m.location,
+        m.shape
+    )
+}
+
+/// A few readable lines on what a run did: metrics, the Snake, the chosen candidate, notes.
+pub fn summary(job: &Job, outcome: &Outcome) -> String {
+    let map = &outcome.map;
+    let m = &map.metrics;
+    let s = &map.snake;
+    let crs = outcome.crs.as_deref().unwrap_or("source units (no CRS)");
+    let mut text = format!(
+        "{} regions from layer {} → {} (layer {}, {}); cell size {} in {crs}\n",
+        map.cells.len(),
+        outcome.source_layer,
+        job.dst,
+        outcome.layer,
+        outcome.format,
+        round_to(map.cell_size, 1),
+    );
+    text += &format!(
+        "metrics: C_adjacent {:.3} (rook {:.3}), C_orientation {:.1}° (misdirected {:.3}), \
+         C_location {:.3} cells (unfitted {}, from moved centroids {:.3}), C_shape {:.3}\n",
+        m.adjacent,
+        m.adjacent_rook,
+        m.orientation,
+        m.misdirected,
+        m.location,
+        round_to(m.location_raw, 1),
+        m.location_moved,
+        m.shape
+    );
+    text += &format!(
+        "snake: {} steps, stopped by {}, spread of neighbour distances {:.3} → {:.3} \
+         (network of {} nodes, {} edges)\n",
+        s.steps,
+        s.stop_reason.as_str(),
+        s.spread_before,
+        s.spread_after,
+        s.nodes,
+        s.edges
+    );
+    if let Some(best) = map.candidates.first() {
+        text += &format!(
+            "chosen: best of {} candidates by TOPSIS (score {:.3}; noise {}, shift {}:{})\n",
+            map.candidates.len(),
+            best.score,
+            best.noise,
+            best.shift[0],
+            best.shift[1]
+        );
+    }
+    for note in &outcome.notes {
+        text += &format!("note: {note}\n");
+    }
+    text
+}
+
+/// `value` with at most `decimals` decimals, without trailing zeros.
+fn round_to(value: f64, decimals: usize) -> String {
+    let text = format!("{value:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        text
+    }
+}

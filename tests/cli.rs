@@ -1,0 +1,849 @@
+//! The `snakegrid` command end to end on the shared layers: outputs are read back with GDAL.
+//!
+//! Inputs are copied to a scratch folder under the system temp dir (the shared data is never
+//! written to). The data folder is `$SNAKEGRID_DATA`, else `/work/shared/data`.
+
+use gdal::spatial_ref::SpatialRef;
+use gdal::vector::{Feature, FieldValue, Geometry, LayerAccess, LayerOptions, OGRFieldType};
+use gdal::{Dataset, DriverManager};
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn data(layer: &str) -> PathBuf {
+    let folder = std::env::var("SNAKEGRID_DATA").unwrap_or_else(|_| "/work/shared/data".into());
+    Path::new(&folder).join(format!("{layer}.gpkg"))
+}
+
+/// A fresh folder, removed at the end of the test.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(test: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("snakegrid-cli-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    /// Copies a shared layer in; returns its path.
+    fn input(&self, layer: &str) -> PathBuf {
+        let to = self.path(&format!("{layer}.gpkg"));
+        std::fs::copy(data(layer), &to).unwrap();
+        to
+    }
+
+    /// The names in the folder, sorted (staging folders start with a dot).
+    fn listing(&self) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(&self.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn snakegrid<I, S>(args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    Command::new(env!("CARGO_BIN_EXE_snakegrid"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+fn assert_success(output: &Output) {
+    assert!(
+        output.status.success(),
+        "snakegrid failed: {}\n{}",
+        stderr(output),
+        stdout(output)
+    );
+}
+
+/// A failure with exit code `code` and a single line on stderr that names `needle`.
+fn assert_fails(output: &Output, code: i32, needle: &str) {
+    let err = stderr(output);
+    assert_eq!(output.status.code(), Some(code), "stderr: {err}");
+    // A progress line cut short by the error may precede the message.
+    let progress = |l: &str| l.chars().all(|c| c.is_ascii_digit() || c == '.');
+    let lines: Vec<&str> = err
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !progress(l))
+        .collect();
+    assert_eq!(lines.len(), 1, "expected one line, got: {err:?}");
+    assert!(lines[0].starts_with("snakegrid: ERROR: "), "{err}");
+    assert!(
+        lines[0].contains(needle),
+        "{:?} does not mention {needle:?}",
+        lines[0]
+    );
+}
+
+/// One output feature: attributes as text and the ring of its square.
+struct Row {
+    fields: BTreeMap<String, String>,
+    ring: Vec<(f64, f64)>,
+}
+
+fn text(value: Option<FieldValue>) -> String {
+    match value {
+        Some(FieldValue::StringValue(s)) => s,
+        Some(FieldValue::IntegerValue(v)) => v.to_string(),
+        Some(FieldValue::Integer64Value(v)) => v.to_string(),
+        Some(FieldValue::RealValue(v)) => v.to_string(),
+        Some(other) => format!("{other:?}"),
+        None => String::new(),
+    }
+}
+
+fn read_rows(path: &Path) -> (Vec<String>, Vec<Row>) {
+    let dataset = Dataset::open(path).unwrap();
+    let mut layer = dataset.layer(0).unwrap();
+    let names: Vec<String> = layer.defn().fields().map(|f| f.name()).collect();
+    let rows = layer
+        .features()
+        .map(|f| {
+            let fields = names
+                .iter()
+                .enumerate()
+                .map(|(i, n)| (n.clone(), text(f.field(i).unwrap())))
+                .collect();
+            let geometry = f.geometry().unwrap();
+            let polygon = if geometry.geometry_count() == 1 && geometry.geometry_name() == "POLYGON"
+            {
+                geometry.get_geometry(0)
+            } else {
+                panic!(
+                    "a cell is not a simple polygon: {}",
+                    geometry.geometry_name()
+                )
+            };
+            let mut points = Vec::new();
+            polygon.get_points(&mut points);
+            Row {
+                fields,
+                ring: points.into_iter().map(|(x, y, _)| (x, y)).collect(),
+            }
+        })
+        .collect();
+    (names, rows)
+}
+
+fn source_fields(layer: &str) -> Vec<String> {
+    let dataset = Dataset::open(data(layer)).unwrap();
+    let layer = dataset.layer(0).unwrap();
+    layer.defn().fields().map(|f| f.name()).collect()
+}
+
+const ADDED: [&str; 5] = [
+    "grid_col",
+    "grid_row",
+    "cell_disp",
+    "nbr_kept",
+    "orient_err",
+];
+
+/// Every row is an axis-aligned square of the same side, placed as its (grid_col, grid_row) says
+/// (so distinct cells cannot overlap), and no two rows share a cell. Returns (id → (col, row)).
+fn assert_grid(rows: &[Row], id_field: &str) -> HashMap<String, (i32, i32)> {
+    let square = |ring: &[(f64, f64)]| {
+        assert_eq!(ring.len(), 5, "a square has 4 corners and a closing point");
+        let xs: Vec<f64> = ring.iter().map(|p| p.0).collect();
+        let ys: Vec<f64> = ring.iter().map(|p| p.1).collect();
+        let (x0, x1) = (
+            xs.iter().cloned().fold(f64::MAX, f64::min),
+            xs.iter().cloned().fold(f64::MIN, f64::max),
+        );
+        let (y0, y1) = (
+            ys.iter().cloned().fold(f64::MAX, f64::min),
+            ys.iter().cloned().fold(f64::MIN, f64::max),
+        );
+        for &(x, y) in ring {
+            assert!((x - x0).abs() < 1e-6 * (x1 - x0) || (x - x1).abs() < 1e-6 * (x1 - x0));
+            assert!((y - y0).abs() < 1e-6 * (y1 - y0) || (y - y1).abs() < 1e-6 * (y1 - y0));
+        }
+        (x0, y1, x1 - x0, y1 - y0)
+    };
+    let (ox, oy, side, _) = square(&rows[0].ring);
+    let cell_of = |row: &Row| -> (i32, i32) {
+        (
+            row.fields["grid_col"].parse().unwrap(),
+            row.fields["grid_row"].parse().unwrap(),
+        )
+    };
+    let (c0, r0) = cell_of(&rows[0]);
+    let mut cells = HashMap::new();
+    let mut taken = HashSet::new();
+    for row in rows {
+        let (x, y, w, h) = square(&row.ring);
+        assert!(
+            (w - side).abs() < 1e-6 * side && (h - side).abs() < 1e-6 * side,
+            "unequal cells"
+        );
+        let (c, r) = cell_of(row);
+        assert!(
+            (x - (ox + f64::from(c - c0) * side)).abs() < 1e-6 * side,
+            "column does not match x"
+        );
+        assert!(
+            (y - (oy - f64::from(r - r0) * side)).abs() < 1e-6 * side,
+            "row does not match y"
+        );
+        assert!(taken.insert((c, r)), "two regions share cell {c},{r}");
+        cells.insert(row.fields[id_field].clone(), (c, r));
+    }
+    cells
+}
+
+/// The full check of one layer's output: one feature per input, all fields, a proper grid.
+fn assert_complete(layer: &str, output: &Path) -> HashMap<String, (i32, i32)> {
+    let (names, rows) = read_rows(output);
+    let mut expected = source_fields(layer);
+    expected.extend(ADDED.iter().map(|s| s.to_string()));
+    assert_eq!(names, expected);
+    let input = Dataset::open(data(layer)).unwrap();
+    assert_eq!(rows.len() as u64, input.layer(0).unwrap().feature_count());
+    assert_grid(&rows, "id")
+}
+
+// ---------------------------------------------------------------------------------------------
+// The command line itself.
+
+#[test]
+fn help_documents_every_option_and_parameter_with_its_default() {
+    let output = snakegrid(["--help"]);
+    assert_success(&output);
+    let help = stdout(&output);
+    for option in [
+        "-f <FORMAT>",
+        "--nln",
+        "--overwrite",
+        "--where",
+        "--id",
+        "--t_srs",
+        "--json",
+        "--svg",
+        "--label",
+        "-q",
+        "--version",
+    ] {
+        assert!(help.contains(option), "--help lacks {option}");
+    }
+    for name in snakegrid::Params::names() {
+        let line = help
+            .split("--")
+            .find(|chunk| chunk.starts_with(&format!("{name} <VALUE>")))
+            .unwrap_or_else(|| panic!("--help lacks parameter {name}"));
+        assert!(
+            line.contains("[default: "),
+            "parameter {name} has no default in --help"
+        );
+    }
+    // ogr2ogr spelling works for help too.
+    assert_success(&snakegrid(["-help"]));
+}
+
+#[test]
+fn version_names_snakegrid_and_gdal() {
+    for flag in ["--version", "-version"] {
+        let output = snakegrid([flag]);
+        assert_success(&output);
+        let text = stdout(&output);
+        assert!(
+            text.starts_with(&format!("snakegrid {} (GDAL 3.", env!("CARGO_PKG_VERSION"))),
+            "{text}"
+        );
+    }
+}
+
+#[test]
+fn an_unknown_option_is_a_usage_error_and_writes_nothing() {
+    let scratch = Scratch::new("unknown-option");
+    let src = scratch.input("us_states");
+    let output = snakegrid(["-frobnicate", "3", p(&scratch.path("out.gpkg")), p(&src)]);
+    assert_fails(&output, 2, "-frobnicate");
+    assert_eq!(scratch.listing(), ["us_states.gpkg"]);
+}
+
+#[test]
+fn a_bad_parameter_value_is_a_usage_error() {
+    let scratch = Scratch::new("bad-parameter");
+    let src = scratch.input("us_states");
+    let output = snakegrid(["-force_cap", "2", p(&scratch.path("out.gpkg")), p(&src)]);
+    assert_fails(&output, 2, "force_cap");
+    let output = snakegrid(["-alpha", "-1", p(&scratch.path("out.gpkg")), p(&src)]);
+    assert_fails(&output, 2, "alpha");
+    assert_eq!(scratch.listing(), ["us_states.gpkg"]);
+}
+
+#[test]
+fn a_missing_source_fails_with_one_line() {
+    let scratch = Scratch::new("missing-source");
+    let output = snakegrid([
+        p(&scratch.path("out.gpkg")),
+        p(&scratch.path("nowhere.gpkg")),
+    ]);
+    assert_fails(&output, 1, "nowhere.gpkg");
+    assert!(scratch.listing().is_empty());
+}
+
+#[test]
+fn a_missing_layer_fails_and_lists_the_layers() {
+    let scratch = Scratch::new("missing-layer");
+    let src = scratch.input("us_states");
+    let output = snakegrid([p(&scratch.path("out.gpkg")), p(&src), "counties"]);
+    assert_fails(&output, 1, "counties");
+    assert!(stderr(&output).contains("us_states"));
+    assert_eq!(scratch.listing(), ["us_states.gpkg"]);
+}
+
+#[test]
+fn a_bad_id_field_fails_and_lists_the_fields() {
+    let scratch = Scratch::new("bad-id");
+    let src = scratch.input("us_states");
+    let output = snakegrid(["-id", "fips", p(&scratch.path("out.gpkg")), p(&src)]);
+    assert_fails(&output, 1, "fips");
+    assert!(stderr(&output).contains("abbr"));
+    assert_eq!(scratch.listing(), ["us_states.gpkg"]);
+}
+
+#[test]
+fn a_bad_where_expression_fails() {
+    let scratch = Scratch::new("bad-where");
+    let src = scratch.input("us_states");
+    let output = snakegrid(["-where", "abbr ===", p(&scratch.path("out.gpkg")), p(&src)]);
+    assert_fails(&output, 1, "-where");
+    let output = snakegrid([
+        "-where",
+        "abbr = 'ZZ'",
+        p(&scratch.path("out.gpkg")),
+        p(&src),
+    ]);
+    assert_fails(&output, 1, "-where");
+    assert_eq!(scratch.listing(), ["us_states.gpkg"]);
+}
+
+#[test]
+fn an_existing_destination_is_refused_without_overwrite_and_left_untouched() {
+    let scratch = Scratch::new("existing");
+    let src = scratch.input("us_states");
+    let dst = scratch.path("out.gpkg");
+    std::fs::write(&dst, b"precious").unwrap();
+    let output = snakegrid(["-id", "id", p(&dst), p(&src)]);
+    assert_fails(&output, 1, "already exists");
+    assert_eq!(std::fs::read(&dst).unwrap(), b"precious");
+    assert_eq!(scratch.listing(), ["out.gpkg", "us_states.gpkg"]);
+}
+
+#[test]
+fn a_failed_run_with_overwrite_leaves_the_old_destination() {
+    let scratch = Scratch::new("overwrite-failed");
+    let src = scratch.input("us_states");
+    let dst = scratch.path("out.gpkg");
+    std::fs::write(&dst, b"precious").unwrap();
+    let output = snakegrid(["-overwrite", "-where", "abbr = 'ZZ'", p(&dst), p(&src)]);
+    assert_fails(&output, 1, "-where");
+    assert_eq!(std::fs::read(&dst).unwrap(), b"precious");
+    assert_eq!(scratch.listing(), ["out.gpkg", "us_states.gpkg"]);
+}
+
+/// Writes a GeoPackage layer `name` (field `code`, null when "") with the given WKT geometries
+/// (None: null).
+fn write_layer(path: &Path, name: &str, rows: &[(&str, Option<&str>)]) {
+    let driver = DriverManager::get_driver_by_name("GPKG").unwrap();
+    let mut dataset = if path.exists() {
+        Dataset::open_ex(
+            path,
+            gdal::DatasetOptions {
+                open_flags: gdal::GdalOpenFlags::GDAL_OF_UPDATE
+                    | gdal::GdalOpenFlags::GDAL_OF_VECTOR,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    } else {
+        driver.create_vector_only(path).unwrap()
+    };
+    let srs = SpatialRef::from_epsg(5070).unwrap();
+    let layer = dataset
+        .create_layer(LayerOptions {
+            name,
+            srs: Some(&srs),
+            ..Default::default()
+        })
+        .unwrap();
+    layer
+        .create_defn_fields(&[("code", OGRFieldType::OFTString)])
+        .unwrap();
+    for (code, wkt) in rows {
+        let mut feature = Feature::new(layer.defn()).unwrap();
+        if !code.is_empty() {
+            feature.set_field_string(0, code).unwrap();
+        }
+        if let Some(wkt) = wkt {
+            feature
+                .set_geometry(Geometry::from_wkt(wkt).unwrap())
+                .unwrap();
+        }
+        feature.create(&layer).unwrap();
+    }
+}
+
+#[test]
+fn unusable_features_are_refused_by_name() {
+    let scratch = Scratch::new("bad-features");
+    let src = scratch.path("bad.gpkg");
+    let square = "POLYGON ((0 0, 1 0, 1 1, 0 1, 0 0))";
+    write_layer(&src, "null_geometry", &[("A", Some(square)), ("B", None)]);
+    write_layer(
+        &src,
+        "point",
+        &[("A", Some(square)), ("C", Some("POINT (1 2)"))],
+    );
+    write_layer(
+        &src,
+        "duplicate",
+        &[("A", Some(square)), ("A", Some(square))],
+    );
+    write_layer(&src, "null_id", &[("A", Some(square)), ("", Some(square))]);
+    let cases = [
+        ("null_geometry", "feature B: the geometry is null"),
+        ("point", "feature C: the geometry is a POINT"),
+        ("duplicate", "feature A: the id is not unique"),
+        ("null_id", "feature FID 2: the id is null"),
+    ];
+    let dst = scratch.path("out.gpkg");
+    for (layer, message) in cases {
+        let output = snakegrid(["-id", "code", p(&dst), p(&src), layer]);
+        assert_fails(&output, 1, message);
+    }
+    assert_eq!(scratch.listing(), ["bad.gpkg"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Whole runs (these need the method's core).
+
+#[test]
+fn us_states_end_to_end() {
+    let scratch = Scratch::new("us-states");
+    let src = scratch.input("us_states");
+    let dst = scratch.path("grid.gpkg");
+    let output = snakegrid(["-id", "id", p(&dst), p(&src)]);
+    assert_success(&output);
+    let cells = assert_complete("us_states", &dst);
+    assert_eq!(cells.len(), 49);
+
+    // The source attributes came along, feature by feature, in input order.
+    let (_, rows) = read_rows(&dst);
+    let input = Dataset::open(data("us_states")).unwrap();
+    let mut layer = input.layer(0).unwrap();
+    for (row, feature) in rows.iter().zip(layer.features()) {
+        for (i, name) in ["id", "name", "abbr"].iter().enumerate() {
+            assert_eq!(row.fields[*name], text(feature.field(i).unwrap()));
+        }
+        let kept: f64 = row.fields["nbr_kept"].parse().unwrap();
+        assert!((0.0..=1.0).contains(&kept));
+    }
+
+    // The run's metrics and parameters are in the layer's metadata.
+    let written = Dataset::open(&dst).unwrap();
+    let layer = written.layer(0).unwrap();
+    use gdal::Metadata;
+    assert!(layer
+        .metadata_item("SNAKEGRID_METRIC_ADJACENT", "")
+        .is_some());
+    assert!(layer
+        .metadata_item("SNAKEGRID_PARAMETERS", "")
+        .unwrap()
+        .contains("\"alpha\""));
+
+    let summary = stdout(&output);
+    for needle in [
+        "49 regions",
+        "C_adjacent",
+        "C_orientation",
+        "snake:",
+        "steps",
+        "→",
+    ] {
+        assert!(
+            summary.contains(needle),
+            "summary lacks {needle:?}: {summary}"
+        );
+    }
+    let progress = stderr(&output);
+    assert!(
+        progress.starts_with("0...10...20...30...40...50...60...70...80...90...100 - done."),
+        "{progress:?}"
+    );
+    assert_eq!(scratch.listing(), ["grid.gpkg", "us_states.gpkg"]);
+
+    // -q: nothing on stdout or stderr.
+    let quiet = snakegrid(["-q", "-id", "id", p(&scratch.path("quiet.gpkg")), p(&src)]);
+    assert_success(&quiet);
+    assert!(quiet.stdout.is_empty() && quiet.stderr.is_empty());
+}
+
+#[test]
+fn the_json_report_has_the_metrics_and_the_snake_run() {
+    let scratch = Scratch::new("json");
+    let src = scratch.input("us_states");
+    let report = scratch.path("report.json");
+    let output = snakegrid([
+        "-q",
+        "-id",
+        "id",
+        "-json",
+        p(&report),
+        p(&scratch.path("grid.gpkg")),
+        p(&src),
+    ]);
+    assert_success(&output);
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    for metric in [
+        "location",
+        "location_raw",
+        "adjacent",
+        "adjacent_rook",
+        "orientation",
+        "misdirected",
+        "shape",
+    ] {
+        assert!(
+            json["metrics"][metric].is_number(),
+            "metrics.{metric} missing"
+        );
+    }
+    assert!(json["snake"]["steps"].is_u64());
+    assert!(json["snake"]["stop_reason"].is_string());
+    assert!(json["snake"]["spread_before"].is_number());
+    assert!(json["snake"]["spread_after"].is_number());
+    assert_eq!(json["parameters"]["alpha"], 1.0);
+    assert_eq!(json["source"]["features"], 49);
+    assert_eq!(json["source"]["id_field"], "id");
+    assert_eq!(json["crs"]["projected"], false);
+    assert!(json["candidates"].as_array().is_some_and(|c| !c.is_empty()));
+    let regions = json["regions"].as_array().unwrap();
+    assert_eq!(regions.len(), 49);
+    assert!(regions
+        .iter()
+        .any(|r| r["id"] == "06" && r["label"] == "CA"));
+    assert!(json["cell_size"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn two_runs_give_byte_identical_outputs() {
+    let scratch = Scratch::new("identical");
+    let src = scratch.input("us_states");
+    let run = |folder: &str| {
+        let dir = scratch.path(folder);
+        std::fs::create_dir(&dir).unwrap();
+        let output = Command::new(env!("CARGO_BIN_EXE_snakegrid"))
+            .current_dir(&dir)
+            .args([
+                "-q",
+                "-id",
+                "id",
+                "-json",
+                "r.json",
+                "-svg",
+                "p.svg",
+                "grid.gpkg",
+                p(&src),
+            ])
+            .output()
+            .unwrap();
+        assert_success(&output);
+        ["grid.gpkg", "r.json", "p.svg"].map(|f| std::fs::read(dir.join(f)).unwrap())
+    };
+    let (first, second) = (run("a"), run("b"));
+    for (k, name) in ["grid.gpkg", "r.json", "p.svg"].iter().enumerate() {
+        assert!(first[k] == second[k], "{name} differs between two runs");
+    }
+}
+
+/// A copy of layer `layer` with its features in reverse order (and so other FIDs), optionally
+/// reprojected; every field is copied as text.
+fn rewrite(layer: &str, to: &Path, reverse: bool, srs: Option<&SpatialRef>) {
+    let input = Dataset::open(data(layer)).unwrap();
+    let mut source = input.layer(0).unwrap();
+    let names: Vec<String> = source.defn().fields().map(|f| f.name()).collect();
+    let source_srs = source.spatial_ref().unwrap();
+    let mut rows: Vec<(Vec<String>, Geometry)> = source
+        .features()
+        .map(|f| {
+            let values = (0..names.len())
+                .map(|i| text(f.field(i).unwrap()))
+                .collect();
+            let mut geometry = f.geometry().unwrap().clone();
+            if let Some(srs) = srs {
+                geometry.transform_to_inplace(srs).unwrap();
+            }
+            (values, geometry)
+        })
+        .collect();
+    if reverse {
+        rows.reverse();
+    }
+    let mut output = DriverManager::get_driver_by_name("GPKG")
+        .unwrap()
+        .create_vector_only(to)
+        .unwrap();
+    let layer = output
+        .create_layer(LayerOptions {
+            name: layer,
+            srs: Some(srs.unwrap_or(&source_srs)),
+            ..Default::default()
+        })
+        .unwrap();
+    let fields: Vec<(&str, u32)> = names
+        .iter()
+        .map(|n| (n.as_str(), OGRFieldType::OFTString))
+        .collect();
+    layer.create_defn_fields(&fields).unwrap();
+    for (values, geometry) in rows {
+        let mut feature = Feature::new(layer.defn()).unwrap();
+        for (i, v) in values.iter().enumerate() {
+            feature.set_field_string(i, v).unwrap();
+        }
+        feature.set_geometry(geometry).unwrap();
+        feature.create(&layer).unwrap();
+    }
+}
+
+#[test]
+fn reordering_the_features_does_not_change_the_layout() {
+    let scratch = Scratch::new("reordered");
+    let src = scratch.input("us_states");
+    let reversed = scratch.path("reversed.gpkg");
+    rewrite("us_states", &reversed, true, None);
+    let (a, b) = (scratch.path("a.gpkg"), scratch.path("b.gpkg"));
+    assert_success(&snakegrid(["-q", "-id", "id", p(&a), p(&src)]));
+    assert_success(&snakegrid(["-q", "-id", "id", p(&b), p(&reversed)]));
+    let (_, rows_a) = read_rows(&a);
+    let (_, rows_b) = read_rows(&b);
+    let (cells_a, cells_b) = (assert_grid(&rows_a, "id"), assert_grid(&rows_b, "id"));
+    assert_eq!(cells_a, cells_b);
+    // Output features follow the input order.
+    assert_eq!(
+        rows_b.first().unwrap().fields["id"],
+        rows_a.last().unwrap().fields["id"]
+    );
+}
+
+#[test]
+fn a_geographic_source_is_projected_to_equal_area_and_says_so() {
+    let scratch = Scratch::new("geographic");
+    let lonlat = scratch.path("lonlat.gpkg");
+    let mut wgs84 = SpatialRef::from_epsg(4326).unwrap();
+    wgs84.set_axis_mapping_strategy(gdal::spatial_ref::AxisMappingStrategy::TraditionalGisOrder);
+    rewrite("us_states", &lonlat, false, Some(&wgs84));
+    let dst = scratch.path("grid.gpkg");
+    let report = scratch.path("r.json");
+    let output = snakegrid(["-id", "id", "-json", p(&report), p(&dst), p(&lonlat)]);
+    assert_success(&output);
+    let summary = stdout(&output);
+    assert!(
+        summary.contains("geographic") && summary.contains("+proj=laea"),
+        "{summary}"
+    );
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(json["crs"]["projected"], true);
+    assert!(json["notes"][0].as_str().unwrap().contains("laea"));
+    let (_, rows) = read_rows(&dst);
+    assert_eq!(assert_grid(&rows, "id").len(), 49);
+    let written = Dataset::open(&dst).unwrap();
+    let srs = written.layer(0).unwrap().spatial_ref().unwrap();
+    assert!(srs.to_proj4().unwrap().contains("+proj=laea"));
+}
+
+#[test]
+fn where_selects_the_features() {
+    let scratch = Scratch::new("where");
+    let src = scratch.input("us_states");
+    let dst = scratch.path("west.gpkg");
+    let filter = "abbr IN ('WA','OR','CA','NV','ID','MT','WY','UT','CO','AZ','NM','TX','OK','KS','NE','SD','ND')";
+    let output = snakegrid(["-q", "-id", "abbr", "-where", filter, p(&dst), p(&src)]);
+    assert_success(&output);
+    let (_, rows) = read_rows(&dst);
+    assert_eq!(assert_grid(&rows, "abbr").len(), 17);
+}
+
+#[test]
+fn shapefile_and_geojson_outputs() {
+    let scratch = Scratch::new("formats");
+    let src = scratch.input("us_states");
+    let shp = scratch.path("grid.shp");
+    assert_success(&snakegrid([
+        "-q",
+        "-id",
+        "id",
+        "-f",
+        "ESRI Shapefile",
+        p(&shp),
+        p(&src),
+    ]));
+    let geojson = scratch.path("grid.geojson");
+    assert_success(&snakegrid([
+        "-q",
+        "-id",
+        "id",
+        "-f",
+        "GeoJSON",
+        "-nln",
+        "cells",
+        p(&geojson),
+        p(&src),
+    ]));
+    for output in [&shp, &geojson] {
+        let (names, rows) = read_rows(output);
+        for field in ["id", "name", "abbr"].iter().chain(ADDED.iter()) {
+            assert!(
+                names.iter().any(|n| n == field),
+                "{} lacks {field}",
+                output.display()
+            );
+        }
+        assert_eq!(assert_grid(&rows, "id").len(), 49);
+    }
+    let listing = scratch.listing();
+    assert!(
+        listing.iter().all(|name| !name.starts_with('.')),
+        "staging left behind: {listing:?}"
+    );
+    for sidecar in ["grid.dbf", "grid.prj", "grid.shx"] {
+        assert!(
+            listing.iter().any(|n| n == sidecar),
+            "{sidecar} missing: {listing:?}"
+        );
+    }
+    // The DBF date is fixed too, so a Shapefile is reproducible from one day to the next.
+    assert_eq!(
+        &std::fs::read(scratch.path("grid.dbf")).unwrap()[1..4],
+        &[100, 1, 1]
+    );
+
+    // -overwrite replaces a Shapefile with its sidecars.
+    assert_success(&snakegrid([
+        "-q",
+        "-overwrite",
+        "-id",
+        "abbr",
+        "-f",
+        "ESRI Shapefile",
+        p(&shp),
+        p(&src),
+    ]));
+    let (_, rows) = read_rows(&shp);
+    assert_eq!(assert_grid(&rows, "abbr").len(), 49);
+}
+
+#[test]
+fn overwrite_replaces_the_destination_after_success() {
+    let scratch = Scratch::new("overwrite");
+    let src = scratch.input("nc_counties");
+    let dst = scratch.path("grid.gpkg");
+    std::fs::write(&dst, b"old").unwrap();
+    assert_success(&snakegrid([
+        "-q",
+        "-overwrite",
+        "-id",
+        "id",
+        p(&dst),
+        p(&src),
+    ]));
+    assert_complete("nc_counties", &dst);
+    // And again, over a real GeoPackage.
+    assert_success(&snakegrid([
+        "-q",
+        "-overwrite",
+        "-id",
+        "id",
+        p(&dst),
+        p(&src),
+    ]));
+    assert_complete("nc_counties", &dst);
+    assert_eq!(scratch.listing(), ["grid.gpkg", "nc_counties.gpkg"]);
+}
+
+#[test]
+fn the_svg_shows_both_maps_with_labelled_cells() {
+    let scratch = Scratch::new("svg");
+    let src = scratch.input("us_states");
+    let picture = scratch.path("map.svg");
+    assert_success(&snakegrid([
+        "-q",
+        "-id",
+        "id",
+        "-svg",
+        p(&picture),
+        p(&scratch.path("g.gpkg")),
+        p(&src),
+    ]));
+    let svg = std::fs::read_to_string(&picture).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("<path ").count(), 49);
+    assert!(svg.contains(">CA</text>") && svg.contains(">DC</text>"));
+    // -label picks another field; text is escaped.
+    let named = scratch.path("named.svg");
+    assert_success(&snakegrid([
+        "-q",
+        "-id",
+        "id",
+        "-label",
+        "name",
+        "-svg",
+        p(&named),
+        p(&scratch.path("h.gpkg")),
+        p(&src),
+    ]));
+    assert!(std::fs::read_to_string(&named)
+        .unwrap()
+        .contains(">California</text>"));
+}
+
+#[test]
+fn world_countries_nc_and_virginia_counties_give_complete_outputs() {
+    let scratch = Scratch::new("other-layers");
+    for layer in ["world_countries", "nc_counties", "virginia_counties"] {
+        let src = scratch.input(layer);
+        let dst = scratch.path(&format!("{layer}-grid.gpkg"));
+        assert_success(&snakegrid(["-q", "-id", "id", p(&dst), p(&src)]));
+        assert_complete(layer, &dst);
+    }
+}
+
+#[test]
+fn us_counties_end_to_end() {
+    let scratch = Scratch::new("us-counties");
+    let src = scratch.input("us_counties");
+    let dst = scratch.path("grid.gpkg");
+    assert_success(&snakegrid(["-q", "-id", "id", p(&dst), p(&src)]));
+    assert_eq!(assert_complete("us_counties", &dst).len(), 3107);
+}

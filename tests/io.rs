@@ -1,0 +1,278 @@
+//! `snakegrid::io::run`, the entry point the command line and the C API share: attribute
+//! fidelity, layers without a CRS, and cancellation (which leaves nothing behind).
+
+use gdal::vector::{Feature, FieldDefn, Geometry, LayerAccess, LayerOptions, OGRFieldType};
+use gdal::{Dataset, DriverManager};
+use snakegrid::io::{run, Job};
+use snakegrid::{Error, Params};
+use std::path::{Path, PathBuf};
+
+/// A fresh folder, removed at the end of the test.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(test: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("snakegrid-io-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    fn listing(&self) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(&self.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn text(path: &Path) -> String {
+    path.to_str().unwrap().to_owned()
+}
+
+/// The fields of the test layer: every basic OGR type, a boolean subtype, and names that clash
+/// with the output's own columns (`fid` with GeoPackage's FID column, `grid_col` with ours).
+const FIELDS: [(&str, OGRFieldType::Type); 9] = [
+    ("code", OGRFieldType::OFTString),
+    ("fid", OGRFieldType::OFTInteger),
+    ("big", OGRFieldType::OFTInteger64),
+    ("ratio", OGRFieldType::OFTReal),
+    ("day", OGRFieldType::OFTDate),
+    ("stamp", OGRFieldType::OFTDateTime),
+    ("flag", OGRFieldType::OFTInteger),
+    ("blob", OGRFieldType::OFTBinary),
+    ("grid_col", OGRFieldType::OFTString),
+];
+
+/// A 4 × 3 block of unit squares (km) with one value of each field type; `srs`: EPSG code.
+fn write_blocks(path: &Path, srs: Option<u32>) {
+    let mut dataset = DriverManager::get_driver_by_name("GPKG")
+        .unwrap()
+        .create_vector_only(path)
+        .unwrap();
+    let srs = srs.map(|code| gdal::spatial_ref::SpatialRef::from_epsg(code).unwrap());
+    let layer = dataset
+        .create_layer(LayerOptions {
+            name: "blocks",
+            srs: srs.as_ref(),
+            // The source's own FID column must not be confused with its `fid` field.
+            options: Some(&["FID=pk"]),
+            ..Default::default()
+        })
+        .unwrap();
+    for (name, kind) in FIELDS {
+        if name != "flag" {
+            FieldDefn::new(name, kind)
+                .unwrap()
+                .add_to_layer(&layer)
+                .unwrap();
+            continue;
+        }
+        // The binding cannot set a subtype.
+        // SAFETY: the definition is created, used while alive and destroyed here; the layer is
+        // alive and copies the definition it is given.
+        unsafe {
+            let name = std::ffi::CString::new(name).unwrap();
+            let definition = gdal_sys::OGR_Fld_Create(name.as_ptr(), kind);
+            gdal_sys::OGR_Fld_SetSubType(definition, gdal_sys::OGRFieldSubType::OFSTBoolean);
+            let result = gdal_sys::OGR_L_CreateField(layer.c_layer(), definition, 0);
+            gdal_sys::OGR_Fld_Destroy(definition);
+            assert_eq!(result, gdal_sys::OGRErr::OGRERR_NONE);
+        }
+    }
+    for k in 0..12 {
+        let (x, y) = (f64::from(k % 4) * 1000.0, f64::from(k / 4) * 1000.0);
+        let mut feature = Feature::new(layer.defn()).unwrap();
+        let values = [
+            format!("B{k:02}"),
+            (100 + k).to_string(),
+            (5_000_000_000_i64 + i64::from(k)).to_string(),
+            format!("{}", f64::from(k) / 3.0),
+            format!("2024-05-{:02}", k + 1),
+            format!("2024-05-06 07:08:{:02}", k),
+            (k % 2).to_string(),
+            format!("CAFE{k:02X}"),
+            "stale".to_owned(),
+        ];
+        for (i, value) in values.iter().enumerate() {
+            feature.set_field_string(i, value).unwrap();
+        }
+        let wkt = format!(
+            "POLYGON (({x} {y}, {} {y}, {} {}, {x} {}, {x} {y}))",
+            x + 1000.0,
+            x + 1000.0,
+            y + 1000.0,
+            y + 1000.0
+        );
+        feature
+            .set_geometry(Geometry::from_wkt(&wkt).unwrap())
+            .unwrap();
+        feature.create(&layer).unwrap();
+    }
+}
+
+/// Field (name, type, subtype) of the first layer, and each feature's values as text.
+#[allow(clippy::type_complexity)]
+fn fields_and_values(path: &Path) -> (Vec<(String, u32, u32)>, Vec<Vec<String>>) {
+    let dataset = Dataset::open(path).unwrap();
+    let mut layer = dataset.layer(0).unwrap();
+    let defn = layer.defn();
+    let fields: Vec<(String, u32, u32)> = defn
+        .fields()
+        .enumerate()
+        .map(|(i, f)| {
+            // SAFETY: the layer definition is alive and i < its field count; the binding has no
+            // subtype getter.
+            let subtype = unsafe {
+                gdal_sys::OGR_Fld_GetSubType(gdal_sys::OGR_FD_GetFieldDefn(defn.c_defn(), i as i32))
+            };
+            (f.name(), f.field_type(), subtype)
+        })
+        .collect();
+    let count = fields.len();
+    let values = layer
+        .features()
+        .map(|f| {
+            (0..count)
+                .map(|i| f.field_as_string(i).unwrap().unwrap_or_default())
+                .collect()
+        })
+        .collect();
+    (fields, values)
+}
+
+fn job(src: &Path, dst: &Path) -> Job {
+    Job {
+        src: text(src),
+        dst: text(dst),
+        id_field: Some("code".into()),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn every_source_field_keeps_its_name_type_subtype_and_value() {
+    let scratch = Scratch::new("fields");
+    let src = scratch.path("blocks.gpkg");
+    write_blocks(&src, Some(3857));
+    let dst = scratch.path("grid.gpkg");
+    let outcome = run(&job(&src, &dst), &Params::default(), &|_, _| true).unwrap();
+    assert_eq!(outcome.map.cells.len(), 12);
+    assert_eq!(outcome.format, "GPKG");
+    assert_eq!(outcome.layer, "blocks");
+    assert!(outcome.crs.as_deref().unwrap().contains("3857"));
+    assert!(
+        outcome
+            .notes
+            .iter()
+            .any(|n| n.contains("grid_col") && n.contains("replaced")),
+        "{:?}",
+        outcome.notes
+    );
+
+    let (source_fields, source_values) = fields_and_values(&src);
+    let (fields, values) = fields_and_values(&dst);
+    let names: Vec<&str> = fields.iter().map(|f| f.0.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "code",
+            "fid",
+            "big",
+            "ratio",
+            "day",
+            "stamp",
+            "flag",
+            "blob",
+            "grid_col",
+            "grid_row",
+            "cell_disp",
+            "nbr_kept",
+            "orient_err"
+        ]
+    );
+    // Every source field but the replaced grid_col is the same field with the same values.
+    assert_eq!(fields[..8], source_fields[..8]);
+    for (row, source_row) in values.iter().zip(&source_values) {
+        assert_eq!(row[..8], source_row[..8]);
+        assert_ne!(row[8], "stale");
+    }
+}
+
+#[test]
+fn a_layer_without_crs_is_taken_as_planar_with_a_note() {
+    let scratch = Scratch::new("no-crs");
+    let src = scratch.path("blocks.gpkg");
+    write_blocks(&src, None);
+    let dst = scratch.path("grid.geojson");
+    let outcome = run(&job(&src, &dst), &Params::default(), &|_, _| true).unwrap();
+    assert!(outcome.crs.is_none());
+    assert!(
+        outcome.notes.iter().any(|n| n.contains("no CRS")),
+        "{:?}",
+        outcome.notes
+    );
+    assert_eq!(outcome.format, "GeoJSON");
+    // -t_srs needs a source CRS.
+    let mut reprojected = job(&src, &scratch.path("other.gpkg"));
+    reprojected.target_srs = Some("EPSG:4326".into());
+    let error = run(&reprojected, &Params::default(), &|_, _| true).unwrap_err();
+    assert!(error.to_string().contains("no CRS"), "{error}");
+}
+
+#[test]
+fn a_cancelled_run_leaves_nothing_behind() {
+    let scratch = Scratch::new("cancelled");
+    let src = scratch.path("blocks.gpkg");
+    write_blocks(&src, Some(3857));
+    let dst = scratch.path("grid.gpkg");
+    let mut with_extras = job(&src, &dst);
+    with_extras.json_report = Some(text(&scratch.path("r.json")));
+    with_extras.svg = Some(text(&scratch.path("p.svg")));
+    // Cancelled while laying out, then while writing.
+    for after in [0.5, 0.95] {
+        let result = run(&with_extras, &Params::default(), &|fraction, _| {
+            fraction < after
+        });
+        assert!(
+            matches!(result, Err(Error::Cancelled)),
+            "{:?}",
+            result.err()
+        );
+        assert_eq!(scratch.listing(), ["blocks.gpkg"]);
+    }
+    // A full run then writes all three.
+    run(&with_extras, &Params::default(), &|_, _| true).unwrap();
+    assert_eq!(
+        scratch.listing(),
+        ["blocks.gpkg", "grid.gpkg", "p.svg", "r.json"]
+    );
+}
+
+#[test]
+fn outputs_must_differ_from_each_other_and_from_the_source() {
+    let scratch = Scratch::new("distinct");
+    let src = scratch.path("blocks.gpkg");
+    write_blocks(&src, Some(3857));
+    let mut same = job(&src, &src);
+    same.overwrite = true;
+    let error = run(&same, &Params::default(), &|_, _| true).unwrap_err();
+    assert!(error.to_string().contains("is the source"), "{error}");
+    let mut twice = job(&src, &scratch.path("grid.gpkg"));
+    twice.json_report = Some(text(&scratch.path("grid.gpkg")));
+    let error = run(&twice, &Params::default(), &|_, _| true).unwrap_err();
+    assert!(error.to_string().contains("two outputs"), "{error}");
+    assert_eq!(scratch.listing(), ["blocks.gpkg"]);
+}
