@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# Checks the C API end to end, as a user of the installed library would meet it:
+#  1. include/snakegrid.h is what build.rs regenerates from src/ffi (CI fails on a stale header);
+#  2. CMake builds the library, the example and the C tests, and ctest passes;
+#  3. `cmake --install` to a temporary prefix, then programs built only from the installed
+#     header, library and CMake package (shared and static) or pkg-config file run the dataset
+#     entry point on us_states.gpkg and write the same layer as the command line;
+#  4. the C tests pass under AddressSanitizer (LeakSanitizer on) and valgrind, with no error and
+#     no leak.
+#
+# Usage: scripts/check-c-api.sh            (from anywhere; needs cmake, a C/C++ compiler,
+#                                           pkg-config, libgdal-dev, gdal-bin and valgrind)
+# Environment: SNAKEGRID_CARGO_PROFILE (default release, to share the README test build),
+#              SNAKEGRID_CHECK_DIR (default build/c-api-check), SNAKEGRID_DATA_DIR (default
+#              ../shared/data beside the repository).
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+profile="${SNAKEGRID_CARGO_PROFILE:-release}"
+work="${SNAKEGRID_CHECK_DIR:-$root/build/c-api-check}"
+data="${SNAKEGRID_DATA_DIR:-$root/../shared/data}"
+us_states="$data/us_states.gpkg"
+profile_dir="$([ "$profile" = dev ] && echo debug || echo "$profile")"
+passes=0
+failures=0
+
+step() { printf '\n== %s\n' "$*"; }
+ok() { printf 'ok: %s\n' "$*"; passes=$((passes + 1)); }
+fail() { printf 'FAILED: %s\n' "$*" >&2; failures=$((failures + 1)); }
+
+[ -f "$us_states" ] || { echo "missing $us_states (set SNAKEGRID_DATA_DIR)" >&2; exit 2; }
+rm -rf "$work"
+mkdir -p "$work/out"
+
+step "header: regenerated from src/ffi, identical to the committed one"
+before="$(sha256sum "$root/include/snakegrid.h" | cut -d' ' -f1)"
+cargo build --manifest-path "$root/Cargo.toml" --profile "$profile" --lib --bin snakegrid
+after="$(sha256sum "$root/include/snakegrid.h" | cut -d' ' -f1)"
+if [ "$before" = "$after" ]; then
+    ok "the header is unchanged by regeneration"
+else
+    fail "include/snakegrid.h changed when regenerated: commit the new header"
+fi
+if git -C "$root" ls-files --error-unmatch include/snakegrid.h >/dev/null 2>&1; then
+    if git -C "$root" diff --quiet -- include/snakegrid.h; then
+        ok "the header is the committed one"
+    else
+        git -C "$root" diff --stat -- include/snakegrid.h
+        fail "include/snakegrid.h differs from the committed one"
+    fi
+fi
+
+step "CMake build and ctest"
+cmake -S "$root" -B "$work/build" -DSNAKEGRID_CARGO_PROFILE="$profile" -DSNAKEGRID_DATA_DIR="$data"
+cmake --build "$work/build"
+if ctest --test-dir "$work/build" --output-on-failure; then ok "ctest"; else fail "ctest"; fi
+
+step "install, then consumers of the installed package"
+cmake --install "$work/build" --prefix "$work/prefix"
+cmake -S "$root/examples/consumer" -B "$work/consumer" -DCMAKE_PREFIX_PATH="$work/prefix"
+cmake --build "$work/consumer"
+PKG_CONFIG_PATH="$work/prefix/lib/pkgconfig" \
+    cc -std=c99 -Wall -Wextra -Werror -pedantic "$root/examples/grid_map.c" -o "$work/consumer/grid_map_pc" \
+    $(PKG_CONFIG_PATH="$work/prefix/lib/pkgconfig" pkg-config --cflags --libs snakegrid) \
+    -Wl,-rpath,"$work/prefix/lib"
+
+# The layer as text (attributes and WKT geometry), to compare two outputs.
+dump() { ogr2ogr -f CSV /vsistdout/ "$1" -lco GEOMETRY=AS_WKT; }
+"$root/target/$profile_dir/snakegrid" -q "$work/out/cli.gpkg" "$us_states"
+dump "$work/out/cli.gpkg" > "$work/out/cli.csv"
+for consumer in grid_map grid_map_static grid_map_pc; do
+    if ! "$work/consumer/$consumer" "$work/out/$consumer.gpkg" "$us_states" > "$work/out/$consumer.txt" 2>/dev/null; then
+        fail "$consumer did not run"
+        continue
+    fi
+    dump "$work/out/$consumer.gpkg" > "$work/out/$consumer.csv"
+    if cmp -s "$work/out/cli.csv" "$work/out/$consumer.csv"; then
+        ok "$consumer wrote the same layer as the command line"
+    else
+        fail "$consumer wrote another layer than the command line"
+    fi
+done
+if ldd "$work/consumer/grid_map" | grep "libsnakegrid.so.0 => $work/prefix/lib/" >/dev/null; then
+    ok "the CMake consumer loads the installed libsnakegrid.so.0"
+else
+    fail "the CMake consumer does not load the installed libsnakegrid.so.0"
+fi
+
+step "AddressSanitizer (with LeakSanitizer)"
+cmake -S "$root" -B "$work/asan" -DSNAKEGRID_CARGO_PROFILE="$profile" -DSNAKEGRID_DATA_DIR="$data" \
+    -DSNAKEGRID_SANITIZE=address
+cmake --build "$work/asan"
+if ASAN_OPTIONS=detect_leaks=1:halt_on_error=1 ctest --test-dir "$work/asan" --output-on-failure; then
+    ok "the C tests and the example under AddressSanitizer"
+else
+    fail "the C tests or the example under AddressSanitizer"
+fi
+
+step "valgrind"
+run_valgrind() {
+    if valgrind --quiet --error-exitcode=1 --leak-check=full --show-leak-kinds=definite,possible \
+        --errors-for-leak-kinds=definite,possible --suppressions="$root/tests/c/valgrind.supp" "$@"; then
+        ok "valgrind: $(basename "$1")"
+    else
+        fail "valgrind: $*"
+    fi
+}
+run_valgrind "$work/build/test_api"
+run_valgrind "$work/build/test_header"
+run_valgrind "$work/build/test_dataset" "$us_states" "$work/out"
+
+step "summary"
+echo "check-c-api: $passes passed, $failures failed"
+[ "$failures" -eq 0 ]

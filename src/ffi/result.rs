@@ -1,0 +1,457 @@
+//! Reading a finished run: per-region cells and metrics, the layout's metrics, the Snake's
+//! report and the ranked candidates. Everything is computed when the run ends, so the accessors
+//! only read and may be called from several threads at once.
+
+use super::handle::{self, Handle, Out};
+use super::status::{c_string, guard, guard_free, Failure, Status};
+use crate::core::{
+    CandidateReport, GridMap, LayoutMetrics, RegionMetrics, SnakeReport, StopReason,
+};
+use std::ffi::{c_char, CString};
+
+/// The outcome of a successful run. Made by snakegrid_run() or snakegrid_run_job(), freed by
+/// snakegrid_result_free(). Strings and WKB buffers read from it belong to it and stay valid
+/// until it is freed.
+pub struct RunResult {
+    _opaque: [u8; 0],
+}
+
+/// What a result handle holds: the grid map and its C views, made once.
+pub(crate) struct Output {
+    map: GridMap,
+    ids: Vec<CString>,
+    cells_wkb: Vec<Vec<u8>>,
+    notes: Vec<CString>,
+}
+
+impl Output {
+    pub(crate) fn new(map: GridMap, notes: &[String]) -> Output {
+        Output {
+            ids: map.cells.iter().map(|c| c_string(&c.id)).collect(),
+            cells_wkb: map
+                .cells
+                .iter()
+                .map(|c| crate::wkb::from_polygon(&c.cell))
+                .collect(),
+            notes: notes.iter().map(|n| c_string(n)).collect(),
+            map,
+        }
+    }
+}
+
+impl Handle for RunResult {
+    type Inner = Output;
+    const TAG: u64 = u64::from_be_bytes(*b"sgRESULT");
+    const NAME: &'static str = "snakegrid_result";
+}
+
+/// Why the Snake stopped (method.md section 5).
+/// cbindgen:rename-all=prefix:SNAKEGRID_STOP_
+#[allow(non_camel_case_types, clippy::upper_case_acronyms)]
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SnakeStop {
+    /// No node moved more than epsilon in the last step: the centroids are grid-like.
+    CONVERGED = 0,
+    /// The largest uncapped force did not fall for 3 steps (only when asked for).
+    NO_PROGRESS = 1,
+    /// The step limit (option max_steps) was reached.
+    MAX_STEPS = 2,
+    /// A step stayed invalid after halving it 4 times; the last valid state was kept.
+    INVALID_STEP = 3,
+    /// The Snake was switched off (max_steps = 0) or had nothing to move.
+    NOT_RUN = 4,
+}
+
+impl From<StopReason> for SnakeStop {
+    fn from(reason: StopReason) -> Self {
+        match reason {
+            StopReason::Converged => SnakeStop::CONVERGED,
+            StopReason::NoProgress => SnakeStop::NO_PROGRESS,
+            StopReason::MaxSteps => SnakeStop::MAX_STEPS,
+            StopReason::InvalidStep => SnakeStop::INVALID_STEP,
+            StopReason::NotRun => SnakeStop::NOT_RUN,
+        }
+    }
+}
+
+/// The four layout metrics of method.md section 8 and their named variants.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CLayoutMetrics {
+    /// C_location: mean distance, in cells, from each region's centroid to its cell centre
+    /// after a least-squares scale-and-translation fit. Lower is better.
+    pub location: f64,
+    /// The same without the fit, in map units.
+    pub location_raw: f64,
+    /// The paper's variant: from the moved centroids, in cells, without the fit.
+    pub location_moved: f64,
+    /// C_adjacent: share of adjacent region pairs whose cells touch (8-neighbourhood). Higher
+    /// is better.
+    pub adjacent: f64,
+    /// Share of adjacent pairs whose cells share an edge (4-neighbourhood).
+    pub adjacent_rook: f64,
+    /// C_orientation: mean angle error over adjacent pairs, degrees (0-180). Lower is better.
+    pub orientation: f64,
+    /// Share of adjacent pairs whose direction is off by more than 45 degrees.
+    pub misdirected: f64,
+    /// C_shape: similarity of the outlines of the cells and of the regions (0-1). Higher is
+    /// better.
+    pub shape: f64,
+}
+
+impl From<&LayoutMetrics> for CLayoutMetrics {
+    fn from(m: &LayoutMetrics) -> Self {
+        CLayoutMetrics {
+            location: m.location,
+            location_raw: m.location_raw,
+            location_moved: m.location_moved,
+            adjacent: m.adjacent,
+            adjacent_rook: m.adjacent_rook,
+            orientation: m.orientation,
+            misdirected: m.misdirected,
+            shape: m.shape,
+        }
+    }
+}
+
+/// How well one region is placed.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CRegionMetrics {
+    /// Distance from the region's centroid to its cell centre, in cells, after the fit.
+    pub displacement: f64,
+    /// Share of the region's adjacent regions whose cells touch its cell (1 when it has none).
+    pub neighbours_kept: f64,
+    /// Mean angle error to its adjacent regions, degrees (0 when it has none).
+    pub orientation_error: f64,
+}
+
+impl From<&RegionMetrics> for CRegionMetrics {
+    fn from(m: &RegionMetrics) -> Self {
+        CRegionMetrics {
+            displacement: m.displacement,
+            neighbours_kept: m.neighbours_kept,
+            orientation_error: m.orientation_error,
+        }
+    }
+}
+
+/// What the Snake did in one run.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CSnakeReport {
+    /// Steps made.
+    pub steps: usize,
+    /// Why it stopped.
+    pub stop_reason: SnakeStop,
+    /// Coefficient of variation of the distances between neighbouring centroids, before.
+    pub spread_before: f64,
+    /// The same after the last step: the Snake exists to make it smaller.
+    pub spread_after: f64,
+    /// Nodes of the network.
+    pub nodes: usize,
+    /// Edges of the network.
+    pub edges: usize,
+}
+
+impl From<&SnakeReport> for CSnakeReport {
+    fn from(s: &SnakeReport) -> Self {
+        CSnakeReport {
+            steps: s.steps,
+            stop_reason: s.stop_reason.into(),
+            spread_before: s.spread_before,
+            spread_after: s.spread_after,
+            nodes: s.nodes,
+            edges: s.edges,
+        }
+    }
+}
+
+/// One candidate layout (method.md section 7) and how it ranked.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CCandidate {
+    /// Noise level MD of its Snake run (0 for the noise-free run).
+    pub noise: f64,
+    /// Lattice origin shift to the right, in cells.
+    pub shift_x: f64,
+    /// Lattice origin shift downwards, in cells.
+    pub shift_y: f64,
+    /// TOPSIS closeness to the ideal (higher is better).
+    pub score: f64,
+    /// Its layout metrics.
+    pub metrics: CLayoutMetrics,
+    /// Its Snake run.
+    pub snake: CSnakeReport,
+}
+
+impl From<&CandidateReport> for CCandidate {
+    fn from(c: &CandidateReport) -> Self {
+        CCandidate {
+            noise: c.noise,
+            shift_x: c.shift[0],
+            shift_y: c.shift[1],
+            score: c.score,
+            metrics: (&c.metrics).into(),
+            snake: (&c.snake).into(),
+        }
+    }
+}
+
+/// Frees a result handle and everything read from it. NULL is ignored.
+///
+/// Thread safety: not concurrently with any other use of the same handle.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_free(result: *mut RunResult) {
+    // SAFETY: `result` is NULL or a handle not used elsewhere meanwhile (header contract).
+    guard_free("snakegrid_result_free", || unsafe {
+        handle::free(result, "result")
+    })
+}
+
+/// Reads the result and writes one value computed from it to `*out`: the body shared by every
+/// accessor below.
+///
+/// # Safety
+/// `result` NULL or a live result handle not being freed meanwhile; `out` NULL or writable.
+unsafe fn read<T>(
+    function: &str,
+    result: *const RunResult,
+    out: *mut T,
+    value: impl FnOnce(&Output) -> Result<T, Failure>,
+) -> Status {
+    guard(function, || {
+        // SAFETY: the caller's guarantees.
+        let output = unsafe { handle::get(result, "result") }?;
+        // SAFETY: the caller's guarantees.
+        let out = unsafe { Out::new(out, "out") }?;
+        out.write(value(output)?);
+        Ok(())
+    })
+}
+
+/// `items[index]`, or SNAKEGRID_INVALID_ARGUMENT naming the range.
+fn at<'a, T>(items: &'a [T], index: usize, what: &str) -> Result<&'a T, Failure> {
+    items.get(index).ok_or_else(|| {
+        Failure::new(
+            Status::INVALID_ARGUMENT,
+            format!(
+                "index {index} is out of range: the result has {} {what}",
+                items.len()
+            ),
+        )
+    })
+}
+
+/// The number of regions, each with one cell; regions are numbered 0..count-1 in the order
+/// they were given (added to the regions handle, or read from the source layer).
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_count(
+    result: *const RunResult,
+    out: *mut usize,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_count", result, out, |o| {
+            Ok(o.map.cells.len())
+        })
+    }
+}
+
+/// The side of a cell, in map units.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_cell_size(
+    result: *const RunResult,
+    out: *mut f64,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_cell_size", result, out, |o| {
+            Ok(o.map.cell_size)
+        })
+    }
+}
+
+/// The id of region `index`, as given. The string belongs to the result.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_region_id(
+    result: *const RunResult,
+    index: usize,
+    out: *mut *const c_char,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_region_id", result, out, |o| {
+            Ok(at(&o.ids, index, "regions")?.as_ptr())
+        })
+    }
+}
+
+/// The cell of region `index`: column from the left and row from the top, both from 0 at the
+/// leftmost and topmost used cells.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_cell(
+    result: *const RunResult,
+    index: usize,
+    col: *mut i32,
+    row: *mut i32,
+) -> Status {
+    guard("snakegrid_result_cell", || {
+        // SAFETY: a live result handle (header contract).
+        let output = unsafe { handle::get(result, "result") }?;
+        // SAFETY: NULL or writable (header contract).
+        let (col, row) = unsafe { (Out::new(col, "col")?, Out::new(row, "row")?) };
+        let cell = at(&output.map.cells, index, "regions")?;
+        col.write(cell.col);
+        row.write(cell.row);
+        Ok(())
+    })
+}
+
+/// The square cell of region `index` as little-endian 2D WKB (a Polygon) in map units:
+/// `*wkb` points to `*wkb_len` bytes that belong to the result.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_cell_wkb(
+    result: *const RunResult,
+    index: usize,
+    wkb: *mut *const u8,
+    wkb_len: *mut usize,
+) -> Status {
+    guard("snakegrid_result_cell_wkb", || {
+        // SAFETY: a live result handle (header contract).
+        let output = unsafe { handle::get(result, "result") }?;
+        // SAFETY: NULL or writable (header contract).
+        let (wkb, wkb_len) = unsafe { (Out::new(wkb, "wkb")?, Out::new(wkb_len, "wkb_len")?) };
+        let bytes = at(&output.cells_wkb, index, "regions")?;
+        wkb.write(bytes.as_ptr());
+        wkb_len.write(bytes.len());
+        Ok(())
+    })
+}
+
+/// How well region `index` is placed.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_region_metrics(
+    result: *const RunResult,
+    index: usize,
+    out: *mut CRegionMetrics,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_region_metrics", result, out, |o| {
+            Ok((&at(&o.map.cells, index, "regions")?.metrics).into())
+        })
+    }
+}
+
+/// The metrics of the chosen layout.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_layout_metrics(
+    result: *const RunResult,
+    out: *mut CLayoutMetrics,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_layout_metrics", result, out, |o| {
+            Ok((&o.map.metrics).into())
+        })
+    }
+}
+
+/// What the Snake did in the chosen layout's run.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_snake_report(
+    result: *const RunResult,
+    out: *mut CSnakeReport,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_snake_report", result, out, |o| {
+            Ok((&o.map.snake).into())
+        })
+    }
+}
+
+/// The number of candidate layouts that were ranked (at least 1).
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_candidate_count(
+    result: *const RunResult,
+    out: *mut usize,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_candidate_count", result, out, |o| {
+            Ok(o.map.candidates.len())
+        })
+    }
+}
+
+/// Candidate `index`, best first: candidate 0 is the chosen layout.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_candidate(
+    result: *const RunResult,
+    index: usize,
+    out: *mut CCandidate,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_candidate", result, out, |o| {
+            Ok(at(&o.map.candidates, index, "candidates")?.into())
+        })
+    }
+}
+
+/// The number of notes the run left for the user (e.g. that a geographic source was
+/// projected); 0 for snakegrid_run().
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_note_count(
+    result: *const RunResult,
+    out: *mut usize,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_note_count", result, out, |o| {
+            Ok(o.notes.len())
+        })
+    }
+}
+
+/// Note `index`, a sentence. The string belongs to the result.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_note(
+    result: *const RunResult,
+    index: usize,
+    out: *mut *const c_char,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_note", result, out, |o| {
+            Ok(at(&o.notes, index, "notes")?.as_ptr())
+        })
+    }
+}

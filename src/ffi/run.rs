@@ -1,0 +1,148 @@
+//! The two entry points, in memory ([`crate::generate`]) and dataset to dataset
+//! ([`crate::io::run`]), and the progress callback that both pass to the core.
+
+use super::handle::{self, Out};
+use super::job::DatasetJob;
+use super::options::Options;
+use super::regions::Regions;
+use super::result::{Output, RunResult};
+use super::status::{c_string, guard, Status};
+use crate::core::Progress;
+use std::ffi::{c_char, c_int, c_void};
+use std::sync::{Mutex, PoisonError};
+
+/// Progress callback: `fraction` done (0 to 1, never decreasing), a short `message` (valid only
+/// during the call) and the `user_data` given to the run. Return 0 to go on, non-zero to cancel:
+/// the run then stops soon after with SNAKEGRID_CANCELLED and the callback is not called again.
+///
+/// It may be called from threads other than the caller's (the candidates run in parallel),
+/// but never from two threads at once, and only until the run returns. It must not throw (C++)
+/// or longjmp out, and must not free the handles the run is using.
+pub type ProgressCallback = Option<
+    unsafe extern "C" fn(fraction: f64, message: *const c_char, user_data: *mut c_void) -> c_int,
+>;
+
+/// A C callback as the core's [`Progress`]: calls are serialised, fractions never go back
+/// (worker threads may report out of order), and a request to cancel is remembered so that
+/// every later report answers "stop" without calling C again.
+struct CallbackProgress {
+    callback: unsafe extern "C" fn(f64, *const c_char, *mut c_void) -> c_int,
+    user_data: *mut c_void,
+    /// Held during each call.
+    state: Mutex<Reported>,
+}
+
+#[derive(Default)]
+struct Reported {
+    /// The largest fraction passed to the callback so far.
+    fraction: f64,
+    /// The callback has asked to cancel.
+    cancelled: bool,
+}
+
+// SAFETY: the core reports progress from worker threads. The header requires the callback and
+// its user_data to be usable from any thread, and the mutex makes the calls one at a time, so
+// sharing the raw pointer between threads adds no data race on the Rust side.
+unsafe impl Sync for CallbackProgress {}
+
+impl CallbackProgress {
+    fn report(&self, fraction: f64, message: &str) -> bool {
+        let mut state = self.state.lock().unwrap_or_else(PoisonError::into_inner);
+        if !state.cancelled {
+            state.fraction = state.fraction.max(fraction.clamp(0.0, 1.0));
+            let message = c_string(message);
+            // SAFETY: a C function pointer given by the caller for this run, called with a
+            // NUL-terminated message that outlives the call and the caller's own user_data.
+            state.cancelled =
+                unsafe { (self.callback)(state.fraction, message.as_ptr(), self.user_data) } != 0;
+        }
+        !state.cancelled
+    }
+}
+
+/// Runs `body` with the core's view of an optional C callback.
+fn with_progress<R>(
+    callback: ProgressCallback,
+    user_data: *mut c_void,
+    body: impl FnOnce(Progress) -> R,
+) -> R {
+    match callback {
+        Some(callback) => {
+            let adapter = CallbackProgress {
+                callback,
+                user_data,
+                state: Mutex::default(),
+            };
+            body(&|fraction, message| adapter.report(fraction, message))
+        }
+        None => body(&|_, _| true),
+    }
+}
+
+/// Makes a grid map of the regions in memory with the given options and writes a new result
+/// handle to `*result` (free it with snakegrid_result_free()). `progress` and `user_data` may be
+/// NULL.
+///
+/// Fails with SNAKEGRID_INVALID_INPUT (no regions, a duplicate or empty id, a region without
+/// area; the message names the region), SNAKEGRID_INVALID_OPTION, SNAKEGRID_CANCELLED, or SNAKEGRID_INTERNAL_ERROR. Thread safety: the
+/// regions and options are only read, so several runs may share them, from any threads, as
+/// long as no thread modifies or frees them meanwhile.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_run(
+    regions: *const Regions,
+    options: *const Options,
+    progress: ProgressCallback,
+    user_data: *mut c_void,
+    result: *mut *mut RunResult,
+) -> Status {
+    guard("snakegrid_run", || {
+        // SAFETY: live handles not modified meanwhile, `result` NULL or writable (header
+        // contract).
+        let (list, params, out) = unsafe {
+            (
+                handle::get(regions, "regions")?,
+                handle::get(options, "options")?,
+                Out::new(result, "result")?,
+            )
+        };
+        let map = with_progress(progress, user_data, |p| crate::generate(list, params, p))?;
+        out.write(handle::into_raw::<RunResult>(Output::new(map, &[])));
+        Ok(())
+    })
+}
+
+/// Runs a job: reads the regions from the source dataset, makes the grid map, writes the
+/// destination (and the report and picture when asked), all through GDAL exactly as the
+/// command line does, and writes a new result handle to `*result`. `progress` and `user_data`
+/// may be NULL. On failure nothing is left at the destination.
+///
+/// Fails with SNAKEGRID_IO_ERROR (the source cannot be read, the destination cannot be written
+/// or exists without overwrite), SNAKEGRID_INVALID_INPUT, SNAKEGRID_CANCELLED or
+/// SNAKEGRID_INTERNAL_ERROR. Thread safety: as snakegrid_run(); two jobs with the same
+/// destination must not run at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_run_job(
+    job: *const DatasetJob,
+    options: *const Options,
+    progress: ProgressCallback,
+    user_data: *mut c_void,
+    result: *mut *mut RunResult,
+) -> Status {
+    guard("snakegrid_run_job", || {
+        // SAFETY: live handles not modified meanwhile, `result` NULL or writable (header
+        // contract).
+        let (job, params, out) = unsafe {
+            (
+                handle::get(job, "job")?,
+                handle::get(options, "options")?,
+                Out::new(result, "result")?,
+            )
+        };
+        let outcome = with_progress(progress, user_data, |p| crate::io::run(job, params, p))?;
+        out.write(handle::into_raw::<RunResult>(Output::new(
+            outcome.map,
+            &outcome.notes,
+        )));
+        Ok(())
+    })
+}

@@ -1,0 +1,115 @@
+//! Well-Known Binary in and out, for callers that hand regions over as bytes (the C API) rather
+//! than as `geo` types. Parsing and writing are the georust `wkb` crate's; this module only
+//! decides what a region may be: a Polygon or a MultiPolygon, read in 2D (Z and M are dropped,
+//! as the method is planar).
+
+use geo::{MultiPolygon, Polygon};
+use geo_traits::to_geo::{ToGeoMultiPolygon, ToGeoPolygon};
+use geo_traits::GeometryTrait;
+use wkb::reader::Wkb;
+use wkb::writer::{write_polygon, WriteOptions};
+use wkb::Endianness;
+
+/// Reads one region's geometry. Either byte order, ISO or extended (EWKB) flavour; the whole
+/// buffer must be one geometry. The error says what is wrong, not which region: the caller
+/// knows that.
+pub fn to_multi_polygon(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
+    let geometry = Wkb::try_new(bytes).map_err(|e| format!("invalid WKB: {e}"))?;
+    // The reader stops at the end of the first geometry; anything after it means the caller
+    // passed the wrong length or several geometries.
+    let used = geometry.buf().len();
+    if used != bytes.len() {
+        return Err(format!(
+            "invalid WKB: {} bytes after the geometry's end (it takes {used} of {})",
+            bytes.len() - used,
+            bytes.len()
+        ));
+    }
+    match geometry.as_type() {
+        geo_traits::GeometryType::Polygon(p) => Ok(MultiPolygon(vec![p.to_polygon()])),
+        geo_traits::GeometryType::MultiPolygon(mp) => Ok(mp.to_multi_polygon()),
+        _ => Err(format!(
+            "expected a Polygon or MultiPolygon, got a {:?}",
+            geometry.geometry_type()
+        )),
+    }
+}
+
+/// Writes a polygon (a grid cell) as little-endian 2D ISO WKB.
+pub fn from_polygon(polygon: &Polygon<f64>) -> Vec<u8> {
+    let mut out = Vec::new();
+    let options = WriteOptions {
+        endianness: Endianness::LittleEndian,
+    };
+    // Writing into a Vec cannot fail for lack of space, and a geo-types polygon is always 2D,
+    // the only other error the writer knows.
+    write_polygon(&mut out, polygon, &options).expect("a 2D polygon always writes to a Vec");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use geo::{polygon, Area};
+
+    fn square() -> Polygon<f64> {
+        polygon![(x: 0.0, y: 0.0), (x: 2.0, y: 0.0), (x: 2.0, y: 2.0), (x: 0.0, y: 2.0)]
+    }
+
+    #[test]
+    fn a_polygon_round_trips() {
+        let bytes = from_polygon(&square());
+        assert_eq!(bytes[0], 1, "little endian");
+        assert_eq!(&bytes[1..5], &3u32.to_le_bytes(), "ISO Polygon");
+        let back = to_multi_polygon(&bytes).unwrap();
+        assert_eq!(back, MultiPolygon(vec![square()]));
+    }
+
+    #[test]
+    fn a_multipolygon_is_read_whole() {
+        let mut bytes = vec![1u8];
+        bytes.extend(6u32.to_le_bytes());
+        bytes.extend(2u32.to_le_bytes());
+        bytes.extend(from_polygon(&square()));
+        bytes.extend(from_polygon(&square()));
+        let back = to_multi_polygon(&bytes).unwrap();
+        assert_eq!(back.0.len(), 2);
+        assert_eq!(back.unsigned_area(), 8.0);
+    }
+
+    #[test]
+    fn z_and_m_are_dropped() {
+        // Big-endian Polygon ZM (ISO code 3003): one ring of four points.
+        let mut bytes = vec![0u8];
+        bytes.extend(3003u32.to_be_bytes());
+        bytes.extend(1u32.to_be_bytes());
+        bytes.extend(4u32.to_be_bytes());
+        for (x, y) in [(0.0f64, 0.0f64), (1.0, 0.0), (0.0, 1.0), (0.0, 0.0)] {
+            for v in [x, y, 7.0, 9.0] {
+                bytes.extend(v.to_be_bytes());
+            }
+        }
+        let back = to_multi_polygon(&bytes).unwrap();
+        assert_eq!(back.unsigned_area(), 0.5);
+    }
+
+    #[test]
+    fn other_types_truncations_and_trailing_bytes_are_refused() {
+        let mut point = vec![1u8];
+        point.extend(1u32.to_le_bytes());
+        point.extend(1.0f64.to_le_bytes());
+        point.extend(2.0f64.to_le_bytes());
+        let err = to_multi_polygon(&point).unwrap_err();
+        assert!(err.contains("got a Point"), "{err}");
+
+        let bytes = from_polygon(&square());
+        for len in 0..bytes.len() {
+            let err = to_multi_polygon(&bytes[..len]).unwrap_err();
+            assert!(err.starts_with("invalid WKB"), "{len}: {err}");
+        }
+        let mut longer = bytes.clone();
+        longer.push(0);
+        let err = to_multi_polygon(&longer).unwrap_err();
+        assert!(err.contains("1 bytes after"), "{err}");
+    }
+}

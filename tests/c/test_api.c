@@ -1,0 +1,523 @@
+/* The in-memory C API: regions from WKB, a run, every result field, and every error path.
+ * Built by CMake (ctest) and by tests/c_api.rs (cargo test); run under ASan and valgrind by
+ * scripts/check-c-api.sh. */
+#define _POSIX_C_SOURCE 200809L /* pthreads, unlink and access under -std=c99 */
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+
+/* The test map: COLS x ROWS squares of SIDE metres, region "rCR" at column C, row R (row 0 at
+ * the bottom, as map y grows upwards). */
+enum { COLS = 6, ROWS = 4, REGIONS = COLS * ROWS };
+static const double SIDE = 1000.0;
+
+/* ---- WKB writing, by hand so that the test depends on nothing but the header ---- */
+
+typedef struct {
+    uint8_t bytes[512];
+    size_t len;
+} wkb_buffer;
+
+static void put_u32(wkb_buffer *b, uint32_t v, int big_endian) {
+    for (int i = 0; i < 4; i++) {
+        int shift = big_endian ? 8 * (3 - i) : 8 * i;
+        b->bytes[b->len++] = (uint8_t)(v >> shift);
+    }
+}
+
+static void put_f64(wkb_buffer *b, double v, int big_endian) {
+    uint64_t bits;
+    memcpy(&bits, &v, sizeof bits);
+    for (int i = 0; i < 8; i++) {
+        int shift = big_endian ? 8 * (7 - i) : 8 * i;
+        b->bytes[b->len++] = (uint8_t)(bits >> shift);
+    }
+}
+
+/* An axis-aligned square polygon, closed ring, counter-clockwise. */
+static void put_square(wkb_buffer *b, double x, double y, double side, int big_endian) {
+    const double ring[5][2] = {{x, y}, {x + side, y}, {x + side, y + side}, {x, y + side}, {x, y}};
+    b->bytes[b->len++] = big_endian ? 0 : 1;
+    put_u32(b, 3, big_endian); /* Polygon */
+    put_u32(b, 1, big_endian); /* one ring */
+    put_u32(b, 5, big_endian); /* five points */
+    for (int i = 0; i < 5; i++) {
+        put_f64(b, ring[i][0], big_endian);
+        put_f64(b, ring[i][1], big_endian);
+    }
+}
+
+static double get_f64_le(const uint8_t *p) {
+    uint64_t bits = 0;
+    for (int i = 7; i >= 0; i--) bits = (bits << 8) | p[i];
+    double v;
+    memcpy(&v, &bits, sizeof v);
+    return v;
+}
+
+static uint32_t get_u32_le(const uint8_t *p) {
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* The regions of the test map. Alternate regions use big-endian and MultiPolygon WKB, so that
+ * every accepted form is exercised. */
+static snakegrid_regions *make_regions(void) {
+    snakegrid_regions *regions = NULL;
+    CHECK_OK(snakegrid_regions_new(&regions));
+    for (int r = 0; r < ROWS; r++) {
+        for (int c = 0; c < COLS; c++) {
+            char id[16];
+            snprintf(id, sizeof id, "r%d%d", c, r);
+            int k = r * COLS + c;
+            wkb_buffer b = {{0}, 0};
+            if (k % 3 == 2) {
+                b.bytes[b.len++] = 1;
+                put_u32(&b, 6, 0); /* MultiPolygon */
+                put_u32(&b, 1, 0);
+            }
+            put_square(&b, c * SIDE, r * SIDE, SIDE, k % 3 == 1);
+            CHECK_OK(snakegrid_regions_add(regions, id, b.bytes, b.len));
+        }
+    }
+    return regions;
+}
+
+/* A quicker run than the defaults; the run's outcome is what is tested, not its quality. */
+static snakegrid_options *make_options(void) {
+    snakegrid_options *options = NULL;
+    CHECK_OK(snakegrid_options_new(&options));
+    CHECK_OK(snakegrid_options_set_int(options, "refine_moves", 2000));
+    CHECK_OK(snakegrid_options_set(options, "noise_levels", "0.02"));
+    return options;
+}
+
+/* ---- version and status ---- */
+
+static void test_version(void) {
+    char expected[64];
+    snprintf(expected, sizeof expected, "%d.%d.%d", SNAKEGRID_VERSION_MAJOR, SNAKEGRID_VERSION_MINOR,
+             SNAKEGRID_VERSION_PATCH);
+    CHECK(strcmp(snakegrid_version(), expected) == 0);
+    CHECK(strcmp(snakegrid_version(), SNAKEGRID_VERSION) == 0);
+}
+
+static void test_status_strings(void) {
+    for (uint32_t s = SNAKEGRID_OK; s <= SNAKEGRID_INTERNAL_ERROR; s++) {
+        const char *text = snakegrid_status_string(s);
+        CHECK(text != NULL && strlen(text) > 0 && strcmp(text, "unknown status") != 0);
+    }
+    CHECK(strcmp(snakegrid_status_string(SNAKEGRID_INTERNAL_ERROR + 1), "unknown status") == 0);
+    CHECK(strcmp(snakegrid_status_string(UINT32_MAX), "unknown status") == 0);
+}
+
+/* ---- NULL arguments, wrong handles, untouched out-parameters ---- */
+
+static void test_null_arguments(void) {
+    snakegrid_options *options = make_options();
+    snakegrid_regions *regions = make_regions();
+    snakegrid_job *job = NULL;
+    CHECK_OK(snakegrid_job_new(&job));
+    uint8_t byte = 1;
+
+    CHECK_FAILS(snakegrid_options_new(NULL), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_MESSAGE_HAS("out");
+    CHECK_FAILS(snakegrid_options_set(NULL, "alpha", "1"), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_options_set(options, NULL, "1"), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_MESSAGE_HAS("name");
+    CHECK_FAILS(snakegrid_options_set(options, "alpha", NULL), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_MESSAGE_HAS("value");
+    CHECK_FAILS(snakegrid_options_set_double(NULL, "alpha", 1.0), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_options_set_int(options, NULL, 1), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_options_set_bool(NULL, "refine", true), SNAKEGRID_NULL_ARGUMENT);
+
+    CHECK_FAILS(snakegrid_regions_new(NULL), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_regions_add(NULL, "a", &byte, 1), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_regions_add(regions, NULL, &byte, 1), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_regions_add(regions, "a", NULL, 1), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_MESSAGE_HAS("wkb");
+
+    CHECK_FAILS(snakegrid_job_new(NULL), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_job_set(NULL, "src", "x"), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_job_set(job, NULL, "x"), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_job_set_overwrite(NULL, true), SNAKEGRID_NULL_ARGUMENT);
+
+    snakegrid_result *result = (snakegrid_result *)&byte; /* must stay untouched */
+    CHECK_FAILS(snakegrid_run(NULL, options, NULL, NULL, &result), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_MESSAGE_HAS("regions");
+    CHECK_FAILS(snakegrid_run(regions, NULL, NULL, NULL, &result), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_MESSAGE_HAS("options");
+    CHECK_FAILS(snakegrid_run(regions, options, NULL, NULL, NULL), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_run_job(NULL, options, NULL, NULL, &result), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_run_job(job, NULL, NULL, NULL, &result), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_run_job(job, options, NULL, NULL, NULL), SNAKEGRID_NULL_ARGUMENT);
+    CHECK(result == (snakegrid_result *)&byte);
+
+    size_t count = 7;
+    double size = 7.0;
+    const char *text = "untouched";
+    const uint8_t *bytes = &byte;
+    int32_t col = 7, row = 7;
+    snakegrid_layout_metrics layout;
+    snakegrid_region_metrics region;
+    snakegrid_snake_report snake;
+    snakegrid_candidate candidate;
+    CHECK_FAILS(snakegrid_result_count(NULL, &count), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_cell_size(NULL, &size), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_region_id(NULL, 0, &text), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_cell(NULL, 0, &col, &row), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_cell_wkb(NULL, 0, &bytes, &count), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_region_metrics(NULL, 0, &region), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_layout_metrics(NULL, &layout), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_snake_report(NULL, &snake), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_candidate_count(NULL, &count), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_candidate(NULL, 0, &candidate), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_note_count(NULL, &count), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_note(NULL, 0, &text), SNAKEGRID_NULL_ARGUMENT);
+    CHECK(count == 7 && size == 7.0 && strcmp(text, "untouched") == 0 && bytes == &byte);
+    CHECK(col == 7 && row == 7);
+
+    /* Freeing NULL is allowed and leaves the last message alone. */
+    snakegrid_options_free(NULL);
+    snakegrid_regions_free(NULL);
+    snakegrid_job_free(NULL);
+    snakegrid_result_free(NULL);
+    CHECK_MESSAGE_HAS("snakegrid_result_note");
+
+    /* A successful call clears the message. */
+    CHECK_OK(snakegrid_options_set(options, "alpha", "1"));
+    CHECK(strcmp(snakegrid_last_error_message(), "") == 0);
+
+    snakegrid_job_free(job);
+    snakegrid_regions_free(regions);
+    snakegrid_options_free(options);
+}
+
+static void test_wrong_handles(void) {
+    snakegrid_options *options = make_options();
+    snakegrid_regions *regions = make_regions();
+    snakegrid_result *result = NULL;
+    /* A handle of another kind is refused, not followed. */
+    CHECK_FAILS(snakegrid_run((const snakegrid_regions *)options, options, NULL, NULL, &result),
+                SNAKEGRID_INVALID_HANDLE);
+    CHECK_MESSAGE_HAS("snakegrid_regions");
+    CHECK_FAILS(snakegrid_options_set((snakegrid_options *)regions, "alpha", "1"), SNAKEGRID_INVALID_HANDLE);
+    size_t count = 0;
+    CHECK_FAILS(snakegrid_result_count((const snakegrid_result *)regions, &count), SNAKEGRID_INVALID_HANDLE);
+    CHECK(result == NULL);
+    /* Freeing through the wrong kind is refused too, and frees nothing. */
+    snakegrid_options_free((snakegrid_options *)regions);
+    CHECK_MESSAGE_HAS("snakegrid_options_free");
+    snakegrid_regions_free(regions);
+    snakegrid_options_free(options);
+}
+
+/* ---- options ---- */
+
+static void test_options(void) {
+    snakegrid_options *options = NULL;
+    CHECK_OK(snakegrid_options_new(&options));
+    CHECK_OK(snakegrid_options_set(options, "force_cap", "0.15"));
+    CHECK_OK(snakegrid_options_set(options, "load_model", "element"));
+    CHECK_OK(snakegrid_options_set(options, "shifts", "0:0,0.5:0.5"));
+    CHECK_OK(snakegrid_options_set(options, "simplify_tolerance", "none"));
+    CHECK_OK(snakegrid_options_set_double(options, "alpha", 2.5));
+    CHECK_OK(snakegrid_options_set_double(options, "epsilon", 1e-4));
+    CHECK_OK(snakegrid_options_set_int(options, "max_steps", 12));
+    CHECK_OK(snakegrid_options_set_int(options, "beta", 3)); /* an integer for a real is fine */
+    CHECK_OK(snakegrid_options_set_bool(options, "refine", false));
+    CHECK_OK(snakegrid_options_set_bool(options, "point_adjacency", true));
+
+    CHECK_FAILS(snakegrid_options_set(options, "gamma", "1"), SNAKEGRID_INVALID_OPTION);
+    CHECK_MESSAGE_HAS("gamma");
+    CHECK_FAILS(snakegrid_options_set_double(options, "no_such_option", 1.0), SNAKEGRID_INVALID_OPTION);
+    CHECK_MESSAGE_HAS("no_such_option");
+    CHECK_FAILS(snakegrid_options_set_double(options, "alpha", -1.0), SNAKEGRID_INVALID_OPTION);
+    CHECK_MESSAGE_HAS("alpha");
+    CHECK_FAILS(snakegrid_options_set_double(options, "force_cap", 2.0), SNAKEGRID_INVALID_OPTION);
+    CHECK_MESSAGE_HAS("force_cap");
+    CHECK_FAILS(snakegrid_options_set_double(options, "beta", NAN), SNAKEGRID_INVALID_OPTION);
+    CHECK_FAILS(snakegrid_options_set_double(options, "beta", INFINITY), SNAKEGRID_INVALID_OPTION);
+    CHECK_FAILS(snakegrid_options_set_double(options, "max_steps", 1.5), SNAKEGRID_INVALID_OPTION);
+    CHECK_MESSAGE_HAS("max_steps");
+    CHECK_FAILS(snakegrid_options_set_int(options, "max_steps", -1), SNAKEGRID_INVALID_OPTION);
+    CHECK_FAILS(snakegrid_options_set_bool(options, "alpha", true), SNAKEGRID_INVALID_OPTION);
+    CHECK_FAILS(snakegrid_options_set(options, "refine", "maybe"), SNAKEGRID_INVALID_OPTION);
+    CHECK_FAILS(snakegrid_options_set(options, "shifts", "0.5"), SNAKEGRID_INVALID_OPTION);
+    CHECK_FAILS(snakegrid_options_set(options, "load_model", "springs"), SNAKEGRID_INVALID_OPTION);
+    /* Text that is not UTF-8 is an argument error, not an unknown option. */
+    CHECK_FAILS(snakegrid_options_set(options, "alph\xff", "1"), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("UTF-8");
+    snakegrid_options_free(options);
+}
+
+/* ---- regions ---- */
+
+static void test_bad_regions(void) {
+    snakegrid_regions *regions = NULL;
+    CHECK_OK(snakegrid_regions_new(&regions));
+    wkb_buffer square = {{0}, 0};
+    put_square(&square, 0, 0, 1, 0);
+
+    for (size_t len = 0; len < square.len; len += 7) {
+        CHECK_FAILS(snakegrid_regions_add(regions, "cut", square.bytes, len), SNAKEGRID_INVALID_INPUT);
+        CHECK_MESSAGE_HAS("cut");
+        CHECK_MESSAGE_HAS("WKB");
+    }
+    wkb_buffer longer = square;
+    longer.bytes[longer.len++] = 0;
+    CHECK_FAILS(snakegrid_regions_add(regions, "long", longer.bytes, longer.len), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("long");
+
+    wkb_buffer garbage = square;
+    garbage.bytes[0] = 7; /* no such byte order */
+    CHECK_FAILS(snakegrid_regions_add(regions, "garbage", garbage.bytes, garbage.len), SNAKEGRID_INVALID_INPUT);
+
+    wkb_buffer point = {{0}, 0};
+    point.bytes[point.len++] = 1;
+    put_u32(&point, 1, 0);
+    put_f64(&point, 1.0, 0);
+    put_f64(&point, 2.0, 0);
+    CHECK_FAILS(snakegrid_regions_add(regions, "dot", point.bytes, point.len), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("dot");
+    CHECK_MESSAGE_HAS("Point");
+
+    CHECK_FAILS(snakegrid_regions_add(regions, "\xc3", square.bytes, square.len), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_FAILS(snakegrid_regions_add(regions, "huge", square.bytes, (size_t)-1), SNAKEGRID_INVALID_ARGUMENT);
+    snakegrid_regions_free(regions);
+}
+
+/* The whole set is checked by the run: empty input, duplicate ids. */
+static void test_invalid_input_runs(void) {
+    snakegrid_options *options = make_options();
+    snakegrid_regions *regions = NULL;
+    snakegrid_result *result = NULL;
+    CHECK_OK(snakegrid_regions_new(&regions));
+    CHECK_FAILS(snakegrid_run(regions, options, NULL, NULL, &result), SNAKEGRID_INVALID_INPUT);
+    CHECK(result == NULL);
+
+    wkb_buffer a = {{0}, 0}, b = {{0}, 0};
+    put_square(&a, 0, 0, 1, 0);
+    put_square(&b, 1, 0, 1, 0);
+    CHECK_OK(snakegrid_regions_add(regions, "twin", a.bytes, a.len));
+    CHECK_OK(snakegrid_regions_add(regions, "twin", b.bytes, b.len));
+    CHECK_FAILS(snakegrid_run(regions, options, NULL, NULL, &result), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("twin");
+    CHECK(result == NULL);
+    snakegrid_regions_free(regions);
+    snakegrid_options_free(options);
+}
+
+/* ---- a run and every result field ---- */
+
+typedef struct {
+    int calls;
+    double last;
+    int monotone;
+    int in_range;
+    int cancel_after; /* cancel on this call; 0 never */
+} progress_log;
+
+/* Called one at a time, though maybe from worker threads: no locking needed. */
+static int record_progress(double fraction, const char *message, void *user_data) {
+    progress_log *log = user_data;
+    log->calls++;
+    if (fraction < 0.0 || fraction > 1.0 || message == NULL) log->in_range = 0;
+    if (fraction < log->last) log->monotone = 0;
+    log->last = fraction;
+    return log->cancel_after != 0 && log->calls >= log->cancel_after;
+}
+
+static void check_result(const snakegrid_result *result) {
+    size_t count = 0;
+    CHECK_OK(snakegrid_result_count(result, &count));
+    CHECK(count == REGIONS);
+    double cell_size = 0;
+    CHECK_OK(snakegrid_result_cell_size(result, &cell_size));
+    /* Total area / M is one square per region. */
+    CHECK(cell_size > 0.5 * SIDE && cell_size < 2.0 * SIDE);
+
+    int used[64][64] = {{0}};
+    int cols = 0, rows = 0;
+    for (size_t i = 0; i < count; i++) {
+        const char *id = NULL;
+        CHECK_OK(snakegrid_result_region_id(result, i, &id));
+        char expected[16];
+        snprintf(expected, sizeof expected, "r%d%d", (int)(i % COLS), (int)(i / COLS));
+        CHECK(id != NULL && strcmp(id, expected) == 0); /* input order */
+
+        int32_t col = -1, row = -1;
+        CHECK_OK(snakegrid_result_cell(result, i, &col, &row));
+        CHECK(col >= 0 && col < 64 && row >= 0 && row < 64);
+        if (col >= 0 && col < 64 && row >= 0 && row < 64) {
+            CHECK(used[col][row] == 0); /* one region per cell */
+            used[col][row] = 1;
+            if (col + 1 > cols) cols = col + 1;
+            if (row + 1 > rows) rows = row + 1;
+        }
+
+        const uint8_t *wkb = NULL;
+        size_t wkb_len = 0;
+        CHECK_OK(snakegrid_result_cell_wkb(result, i, &wkb, &wkb_len));
+        /* Little-endian Polygon, one ring of 5 points: 1 + 4 + 4 + 4 + 5 * 16 bytes. */
+        CHECK(wkb != NULL && wkb_len == 93);
+        if (wkb != NULL && wkb_len == 93) {
+            CHECK(wkb[0] == 1 && get_u32_le(wkb + 1) == 3 && get_u32_le(wkb + 5) == 1 && get_u32_le(wkb + 9) == 5);
+            double min_x = INFINITY, max_x = -INFINITY, min_y = INFINITY, max_y = -INFINITY;
+            for (int p = 0; p < 5; p++) {
+                double x = get_f64_le(wkb + 13 + 16 * p), y = get_f64_le(wkb + 21 + 16 * p);
+                min_x = fmin(min_x, x), max_x = fmax(max_x, x), min_y = fmin(min_y, y), max_y = fmax(max_y, y);
+            }
+            CHECK(fabs((max_x - min_x) - cell_size) < 1e-6 * cell_size);
+            CHECK(fabs((max_y - min_y) - cell_size) < 1e-6 * cell_size);
+        }
+
+        snakegrid_region_metrics m;
+        CHECK_OK(snakegrid_result_region_metrics(result, i, &m));
+        CHECK(m.displacement >= 0 && isfinite(m.displacement));
+        CHECK(m.neighbours_kept >= 0 && m.neighbours_kept <= 1);
+        CHECK(m.orientation_error >= 0 && m.orientation_error <= 180);
+    }
+    CHECK(cols * rows >= REGIONS);
+
+    snakegrid_layout_metrics layout;
+    CHECK_OK(snakegrid_result_layout_metrics(result, &layout));
+    CHECK(layout.location >= 0 && isfinite(layout.location) && layout.location_raw >= 0 && layout.location_moved >= 0);
+    CHECK(layout.adjacent >= 0 && layout.adjacent <= 1 && layout.adjacent_rook >= 0 && layout.adjacent_rook <= layout.adjacent);
+    CHECK(layout.orientation >= 0 && layout.orientation <= 180);
+    CHECK(layout.misdirected >= 0 && layout.misdirected <= 1);
+    CHECK(layout.shape >= 0 && layout.shape <= 1);
+    /* A block of squares is already a grid map: the method should keep most neighbours. */
+    CHECK(layout.adjacent >= 0.8);
+
+    snakegrid_snake_report snake;
+    CHECK_OK(snakegrid_result_snake_report(result, &snake));
+    CHECK(snake.stop_reason <= SNAKEGRID_STOP_NOT_RUN);
+    CHECK(snake.nodes >= REGIONS && snake.edges >= REGIONS - 1);
+    CHECK(snake.spread_before >= 0 && snake.spread_after >= 0);
+
+    size_t candidates = 0;
+    CHECK_OK(snakegrid_result_candidate_count(result, &candidates));
+    CHECK(candidates == 8); /* noise levels 0 and 0.02, four shifts each */
+    for (size_t i = 0; i < candidates; i++) {
+        snakegrid_candidate c;
+        CHECK_OK(snakegrid_result_candidate(result, i, &c));
+        CHECK(c.noise == 0.0 || c.noise == 0.02);
+        CHECK((c.shift_x == 0.0 || c.shift_x == 0.5) && (c.shift_y == 0.0 || c.shift_y == 0.5));
+        CHECK(c.score >= 0 && c.score <= 1);
+        if (i == 0) {
+            /* The first candidate is the chosen layout. */
+            CHECK(memcmp(&c.metrics, &layout, sizeof layout) == 0);
+            CHECK(c.snake.steps == snake.steps && c.snake.stop_reason == snake.stop_reason);
+        }
+    }
+
+    size_t notes = 7;
+    CHECK_OK(snakegrid_result_note_count(result, &notes));
+    CHECK(notes == 0);
+
+    /* Indexes past the end are argument errors that leave the outputs alone. */
+    const char *id = "untouched";
+    int32_t col = -7, row = -7;
+    snakegrid_candidate c;
+    CHECK_FAILS(snakegrid_result_region_id(result, count, &id), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("out of range");
+    CHECK_FAILS(snakegrid_result_cell(result, (size_t)-1, &col, &row), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_candidate(result, candidates, &c), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_note(result, 0, &id), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK(strcmp(id, "untouched") == 0 && col == -7 && row == -7);
+    CHECK_FAILS(snakegrid_result_cell(result, 0, NULL, &row), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_cell_wkb(result, 0, NULL, &count), SNAKEGRID_NULL_ARGUMENT);
+}
+
+static void test_run(void) {
+    snakegrid_options *options = make_options();
+    snakegrid_regions *regions = make_regions();
+    snakegrid_result *result = NULL;
+    progress_log log = {0, 0.0, 1, 1, 0};
+    CHECK_OK(snakegrid_run(regions, options, record_progress, &log, &result));
+    CHECK(result != NULL);
+    CHECK(log.calls > 0 && log.in_range && log.monotone);
+    if (result != NULL) check_result(result);
+    snakegrid_result_free(result);
+
+    /* Without a callback, and with the same options: the same layout. */
+    snakegrid_result *again = NULL;
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &again));
+    snakegrid_result_free(again);
+    snakegrid_regions_free(regions);
+    snakegrid_options_free(options);
+}
+
+static void test_cancel(void) {
+    snakegrid_options *options = make_options();
+    snakegrid_regions *regions = make_regions();
+    snakegrid_result *result = NULL;
+    progress_log log = {0, 0.0, 1, 1, 1};
+    CHECK_FAILS(snakegrid_run(regions, options, record_progress, &log, &result), SNAKEGRID_CANCELLED);
+    CHECK(result == NULL);
+    CHECK(log.calls == 1); /* never called again once it has said stop */
+    snakegrid_regions_free(regions);
+    snakegrid_options_free(options);
+}
+
+/* ---- threads: independent handles at once, a shared read-only one, per-thread messages ---- */
+
+typedef struct {
+    const snakegrid_options *options; /* shared, only read */
+    snakegrid_status status;
+    int32_t cells[REGIONS][2];
+    int message_is_own;
+} thread_job;
+
+static void *run_in_thread(void *arg) {
+    thread_job *job = arg;
+    snakegrid_regions *regions = make_regions();
+    snakegrid_result *result = NULL;
+    job->status = snakegrid_run(regions, job->options, NULL, NULL, &result);
+    for (size_t i = 0; result != NULL && i < REGIONS; i++) {
+        snakegrid_result_cell(result, i, &job->cells[i][0], &job->cells[i][1]);
+    }
+    /* A failure on this thread leaves its own message, whatever the other thread does. */
+    snakegrid_options_set(NULL, "alpha", "1");
+    job->message_is_own = strstr(snakegrid_last_error_message(), "snakegrid_options_set") != NULL;
+    snakegrid_result_free(result);
+    snakegrid_regions_free(regions);
+    return NULL;
+}
+
+static void test_threads(void) {
+    snakegrid_options *options = make_options();
+    thread_job jobs[2];
+    pthread_t threads[2];
+    memset(jobs, 0, sizeof jobs);
+    for (int t = 0; t < 2; t++) {
+        jobs[t].options = options;
+        CHECK(pthread_create(&threads[t], NULL, run_in_thread, &jobs[t]) == 0);
+    }
+    for (int t = 0; t < 2; t++) CHECK(pthread_join(threads[t], NULL) == 0);
+    for (int t = 0; t < 2; t++) {
+        CHECK(jobs[t].status == SNAKEGRID_OK);
+        CHECK(jobs[t].message_is_own);
+    }
+    /* The method is deterministic: both threads found the same layout. */
+    CHECK(memcmp(jobs[0].cells, jobs[1].cells, sizeof jobs[0].cells) == 0);
+    snakegrid_options_free(options);
+}
+
+int main(void) {
+    test_version();
+    test_status_strings();
+    test_null_arguments();
+    test_wrong_handles();
+    test_options();
+    test_bad_regions();
+    test_invalid_input_runs();
+    test_run();
+    test_cancel();
+    test_threads();
+    return check_summary("test_api");
+}

@@ -1,0 +1,224 @@
+//! The C API as C sees it: compiles the programs in tests/c/ with the `cc` crate's compiler
+//! against include/snakegrid.h and the freshly built shared library, runs them, and checks that
+//! the committed header's version macros match Cargo.toml. scripts/check-c-api.sh runs the
+//! same programs through CMake, AddressSanitizer and valgrind.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The cdylib cargo built with this test. It sits beside the test binary in `deps/`; the copy
+/// one level up is only refreshed by builds that ask for the library itself (`cargo build`), not
+/// by `cargo test`, so it may be stale.
+fn built_library() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test knows its own path");
+    exe.with_file_name("libsnakegrid.so")
+}
+
+/// A folder with the library under its SONAME (libsnakegrid.so.0, which is what a linked
+/// program asks the loader for) and its link name, both pointing at cargo's copy.
+fn library_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let built = built_library();
+        assert!(
+            built.exists(),
+            "{} is missing: the cdylib is built with the library",
+            built.display()
+        );
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join("c_api")
+            .join("lib");
+        std::fs::create_dir_all(&dir).unwrap();
+        let major = env!("CARGO_PKG_VERSION_MAJOR");
+        for name in [
+            format!("libsnakegrid.so.{major}"),
+            "libsnakegrid.so".to_owned(),
+        ] {
+            let link = dir.join(name);
+            let _ = std::fs::remove_file(&link);
+            std::os::unix::fs::symlink(&built, &link).unwrap();
+        }
+        dir
+    })
+}
+
+/// Compiles `source` (C, or C++ for .cpp) into an executable linked against the library and
+/// `libs`, with warnings as errors, and returns its path.
+fn compile(source: &Path, libs: &[&str]) -> PathBuf {
+    let cpp = source.extension().is_some_and(|e| e == "cpp");
+    let target = env!("SNAKEGRID_TARGET");
+    let compiler = cc::Build::new()
+        .cpp(cpp)
+        .target(target)
+        .host(target)
+        .opt_level(0)
+        .debug(true)
+        .cargo_metadata(false)
+        .cargo_warnings(false)
+        .get_compiler();
+    let exe = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("c_api")
+        .join(source.file_stem().unwrap());
+    let lib = library_dir();
+    let mut command = compiler.to_command();
+    command
+        .arg(if cpp { "-std=c++11" } else { "-std=c99" })
+        .args(["-Wall", "-Wextra", "-Werror", "-pedantic"])
+        .arg("-I")
+        .arg(root().join("include"))
+        .arg(source)
+        .arg("-o")
+        .arg(&exe)
+        .arg(format!("-L{}", lib.display()))
+        .arg(format!("-Wl,-rpath,{}", lib.display()))
+        .arg("-lsnakegrid");
+    for lib in libs {
+        command.arg(lib);
+    }
+    let output = command.output().expect("the C compiler runs");
+    assert!(
+        output.status.success(),
+        "compiling {} failed:\n{}",
+        source.display(),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    exe
+}
+
+fn c_test(name: &str) -> PathBuf {
+    root().join("tests/c").join(name)
+}
+
+/// Runs a compiled program, fails with its output unless it exits with 0, returns its stdout.
+fn run(exe: &Path, args: &[&Path]) -> String {
+    let output = Command::new(exe)
+        .args(args)
+        .output()
+        .expect("the program runs");
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    print!("{stdout}");
+    assert!(
+        output.status.success(),
+        "{} failed:\n{stdout}{stderr}",
+        exe.display()
+    );
+    stdout
+}
+
+/// Runs one of the test programs, which end with "N passed, N failed".
+fn run_tests(exe: &Path, args: &[&Path]) {
+    let stdout = run(exe, args);
+    assert!(stdout.contains(" 0 failed"), "{stdout}");
+}
+
+/// pkg-config's answer for GDAL, whose headers are included as system headers (they are not
+/// -pedantic clean).
+fn gdal_flags() -> Vec<String> {
+    let query = |what: &str| {
+        let output = Command::new("pkg-config")
+            .args([what, "gdal"])
+            .output()
+            .expect("pkg-config runs");
+        assert!(output.status.success(), "pkg-config finds no gdal");
+        String::from_utf8(output.stdout).unwrap()
+    };
+    let includes = query("--cflags-only-I");
+    let libs = query("--libs");
+    includes
+        .split_whitespace()
+        .flat_map(|flag| {
+            [
+                "-isystem".to_owned(),
+                flag.trim_start_matches("-I").to_owned(),
+            ]
+        })
+        .chain(libs.split_whitespace().map(str::to_owned))
+        .collect()
+}
+
+#[test]
+fn the_in_memory_api_passes_its_c_tests() {
+    let exe = compile(&c_test("test_api.c"), &["-lpthread", "-lm"]);
+    run_tests(&exe, &[]);
+}
+
+#[test]
+fn the_dataset_api_matches_the_in_memory_api_on_us_states() {
+    let data = root().join("../shared/data/us_states.gpkg");
+    assert!(
+        data.exists(),
+        "{} is missing: the shared data sit beside the repository",
+        data.display()
+    );
+    let gdal = gdal_flags();
+    let exe = compile(
+        &c_test("test_dataset.c"),
+        &gdal.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("c_api")
+        .join("dataset-out");
+    std::fs::create_dir_all(&out).unwrap();
+    run_tests(&exe, &[&data, &out]);
+}
+
+#[test]
+fn the_header_compiles_and_links_as_cpp() {
+    let exe = compile(&c_test("test_header.cpp"), &[]);
+    run_tests(&exe, &[]);
+}
+
+#[test]
+fn the_header_version_macros_match_cargo_toml() {
+    let manifest = std::fs::read_to_string(root().join("Cargo.toml")).unwrap();
+    let version = manifest
+        .lines()
+        .find_map(|line| line.strip_prefix("version = \""))
+        .and_then(|rest| rest.strip_suffix('"'))
+        .expect("Cargo.toml has a package version");
+    let parts: Vec<&str> = version.split('.').collect();
+    assert_eq!(parts.len(), 3, "{version}");
+    let header = std::fs::read_to_string(root().join("include/snakegrid.h")).unwrap();
+    for (name, value) in ["MAJOR", "MINOR", "PATCH"].iter().zip(&parts) {
+        let line = format!("#define SNAKEGRID_VERSION_{name} {value}\n");
+        assert!(header.contains(&line), "the header lacks {line:?}");
+    }
+    assert!(header.contains(&format!("#define SNAKEGRID_VERSION \"{version}\"\n")));
+}
+
+#[test]
+fn the_example_in_the_docs_compiles_and_runs_as_written() {
+    let docs = std::fs::read_to_string(root().join("docs/c-api.md")).unwrap();
+    let example = docs
+        .split("```c\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .expect("docs/c-api.md has a ```c example");
+    let source = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("c_api")
+        .join("docs_example.c");
+    std::fs::create_dir_all(source.parent().unwrap()).unwrap();
+    std::fs::write(&source, example).unwrap();
+    let stdout = run(&compile(&source, &[]), &[]);
+    assert!(stdout.starts_with("neighbours kept: "), "{stdout}");
+    for id in ["sw", "se", "nw", "ne"] {
+        assert!(stdout.contains(&format!("{id}: column ")), "{stdout}");
+    }
+}
+
+#[test]
+fn the_docs_list_every_option() {
+    let docs = std::fs::read_to_string(root().join("docs/c-api.md")).unwrap();
+    for name in snakegrid::Params::names() {
+        assert!(
+            docs.contains(&format!("| `{name}` |")),
+            "docs/c-api.md does not list option {name}"
+        );
+    }
+}
