@@ -38,6 +38,10 @@ pub struct Layout<'a> {
 /// # Panics
 /// If two regions share a cell, or a cell index is outside the lattice.
 pub fn refine(layout: &Layout, cells: &[usize], params: &Params, seed: u64) -> Vec<usize> {
+    if cells.is_empty() {
+        // No region to draw a proposal for.
+        return Vec::new();
+    }
     let problem = Problem::new(layout, params);
     let (best, _) = anneal(&problem, cells, params, seed);
     // The search tracks its energy as a sum of many deltas; comparing exact totals makes the
@@ -550,6 +554,24 @@ mod tests {
         let first = refine(&layout, &cells, &params, 11);
         assert_eq!(refine(&layout, &cells, &params, 11), first);
         assert_ne!(first, cells);
+    }
+
+    #[test]
+    fn nothing_to_do_changes_nothing() {
+        let map = Map::new(3, 3, 1);
+        let empty = Layout {
+            adjacency: &[],
+            centroids: &[],
+            moved: &[],
+            lattice: &map.lattice,
+        };
+        assert!(refine(&empty, &[], &Params::default(), 1).is_empty());
+        let scrambled = [8, 7, 6, 5, 4, 3, 2, 1, 0];
+        let still = Params {
+            refine_moves: 0,
+            ..Params::default()
+        };
+        assert_eq!(refine(&map.layout(), &scrambled, &still, 1), scrambled);
     }
 
     #[test]
