@@ -18,21 +18,7 @@ impl Frame {
     pub fn of(regions: &[&MultiPolygon<f64>]) -> Option<Frame> {
         let area: f64 = regions.iter().map(|r| r.unsigned_area()).sum();
         let scale = (area / regions.len() as f64).sqrt();
-        let bounds = regions
-            .iter()
-            .filter_map(|r| r.bounding_rect())
-            .reduce(|a, b| {
-                geo::Rect::new(
-                    Coord {
-                        x: a.min().x.min(b.min().x),
-                        y: a.min().y.min(b.min().y),
-                    },
-                    Coord {
-                        x: a.max().x.max(b.max().x),
-                        y: a.max().y.max(b.max().y),
-                    },
-                )
-            })?;
+        let bounds = super::geometry::bounds(regions.iter().filter_map(|r| r.bounding_rect()))?;
         (scale.is_finite() && scale > 0.0).then(|| Frame {
             origin: bounds.center(),
             scale,

@@ -3,7 +3,7 @@
 //! cross another?" in logarithmic time. The Snake asks these of a moving outline every step, so
 //! they work on plain coordinate rings rather than on geo polygons.
 
-use geo::Coord;
+use geo::{Coord, Rect};
 use rstar::{PointDistance, RTree, RTreeObject, AABB};
 
 /// Closed rings given as open coordinate chains (the last vertex joins the first).
@@ -29,6 +29,22 @@ impl PointDistance for Segment {
     fn distance_2(&self, p: &[f64; 2]) -> f64 {
         point_segment_distance2(Coord { x: p[0], y: p[1] }, self.a, self.b)
     }
+}
+
+/// The smallest rectangle holding all of `rects` (`None` for none).
+pub fn bounds(rects: impl Iterator<Item = Rect<f64>>) -> Option<Rect<f64>> {
+    rects.reduce(|a, b| {
+        Rect::new(
+            Coord {
+                x: a.min().x.min(b.min().x),
+                y: a.min().y.min(b.min().y),
+            },
+            Coord {
+                x: a.max().x.max(b.max().x),
+                y: a.max().y.max(b.max().y),
+            },
+        )
+    })
 }
 
 /// Squared distance from `p` to the segment `a`–`b`.

@@ -3,6 +3,7 @@
 //! centroid lies on the source map, so a cell far from home stands out; each cell carries the
 //! region's short label. Written by hand: the format is simple and the output deterministic.
 
+use crate::core::geometry::bounds;
 use crate::core::{GridMap, Region};
 use geo::{BoundingRect, Coord, LineString, Rect, Simplify};
 use std::fmt::Write;
@@ -17,8 +18,8 @@ const DETAIL: f64 = 0.4;
 
 /// The SVG document. `labels` and `regions` are in input order, as `map.cells` is.
 pub(crate) fn render(regions: &[Region], labels: &[String], map: &GridMap) -> String {
-    let source_box = union(regions.iter().filter_map(|r| r.geometry.bounding_rect()));
-    let grid_box = union(map.cells.iter().filter_map(|c| c.cell.bounding_rect()));
+    let source_box = bounds(regions.iter().filter_map(|r| r.geometry.bounding_rect()));
+    let grid_box = bounds(map.cells.iter().filter_map(|c| c.cell.bounding_rect()));
     let (Some(source_box), Some(grid_box)) = (source_box, grid_box) else {
         return String::new();
     };
@@ -152,21 +153,6 @@ fn push_ring(path: &mut String, view: &View, ring: &LineString<f64>) {
     }
     points.pop(); // the closing point; Z closes the ring
     let _ = write!(path, "M{}Z ", points.join("L"));
-}
-
-fn union(rects: impl Iterator<Item = Rect<f64>>) -> Option<Rect<f64>> {
-    rects.reduce(|a, b| {
-        Rect::new(
-            Coord {
-                x: a.min().x.min(b.min().x),
-                y: a.min().y.min(b.min().y),
-            },
-            Coord {
-                x: a.max().x.max(b.max().x),
-                y: a.max().y.max(b.max().y),
-            },
-        )
-    })
 }
 
 /// A colour from a position on the source map: hue from west to east, lightness from north to
