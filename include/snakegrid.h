@@ -533,6 +533,17 @@ snakegrid_status snakegrid_result_cell_wkb(const struct snakegrid_result *result
                                            size_t *wkb_len);
 
 /**
+ * The map's outline after the Snake moved it (method.md section 6, the shape the lattice was
+ * fitted to), as little-endian 2D WKB (a MultiPolygon) in map units: `*wkb` points to
+ * `*wkb_len` bytes that belong to the result.
+ *
+ * Thread safety: any number of threads may read one result at once.
+ */
+snakegrid_status snakegrid_result_moved_outline_wkb(const struct snakegrid_result *result,
+                                                    const uint8_t **wkb,
+                                                    size_t *wkb_len);
+
+/**
  * How well region `index` is placed.
  *
  * Thread safety: any number of threads may read one result at once.
@@ -590,6 +601,25 @@ snakegrid_status snakegrid_result_note_count(const struct snakegrid_result *resu
 snakegrid_status snakegrid_result_note(const struct snakegrid_result *result,
                                        size_t index,
                                        const char **out);
+
+/**
+ * Scores an existing layout: `cells` holds one square per region under the region's id (the
+ * grid layer of a run, perhaps edited by hand), in the CRS of `regions`. Writes the layout's
+ * metrics to `*layout` and, when `region_metrics` is not NULL, region `i`'s metrics to
+ * `region_metrics[i]` in the order of `regions`; `region_metrics_len` must then be the number
+ * of regions. Columns and rows are recovered from the cell centres and the mean cell side.
+ *
+ * Fails with SNAKEGRID_INVALID_INPUT, naming the id, for a region without a cell, a cell
+ * without a region, a repeated cell id, a cell that is not one polygon or has no area, and for
+ * regions snakegrid_run() would refuse; SNAKEGRID_INVALID_ARGUMENT for a `region_metrics_len`
+ * that is not the number of regions. Thread safety: both handles are only read, so they may be
+ * shared by several calls from any threads while no thread modifies or frees them.
+ */
+snakegrid_status snakegrid_score(const struct snakegrid_regions *regions,
+                                 const struct snakegrid_regions *cells,
+                                 struct snakegrid_layout_metrics *layout,
+                                 struct snakegrid_region_metrics *region_metrics,
+                                 size_t region_metrics_len);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -192,3 +192,36 @@ impl<T> Out<T> {
         unsafe { self.0.as_ptr().write(value) }
     }
 }
+
+/// An out-array of `len` elements the caller provides, checked before the work starts and
+/// written only once it has succeeded, like [`Out`].
+pub(crate) struct OutArray<T> {
+    ptr: NonNull<T>,
+    len: usize,
+}
+
+impl<T> OutArray<T> {
+    /// # Safety
+    /// `ptr` must be NULL or valid for writing `len` elements of `T` until
+    /// [`OutArray::write`] is called.
+    pub(crate) unsafe fn new(ptr: *mut T, len: usize, argument: &str) -> Result<Self, Failure> {
+        NonNull::new(ptr)
+            .map(|ptr| OutArray { ptr, len })
+            .ok_or_else(|| Failure::null(argument))
+    }
+
+    /// The number of elements the caller provided room for.
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Writes `values`, which the caller of this function has checked to hold exactly
+    /// [`OutArray::len`] elements; the elements are plain data, overwritten without a drop.
+    pub(crate) fn write(self, values: impl IntoIterator<Item = T>) {
+        for (i, value) in values.into_iter().take(self.len).enumerate() {
+            // SAFETY: i < len, and the array is valid for writing `len` elements (guaranteed
+            // when the OutArray was made); `write` neither reads nor drops the old value.
+            unsafe { self.ptr.as_ptr().add(i).write(value) }
+        }
+    }
+}

@@ -11,7 +11,8 @@
 //! - [`regions`]: regions given in memory as (id, WKB);
 //! - [`job`]: a dataset-to-dataset run, as the command line describes it;
 //! - [`run`]: the two entry points and the progress callback;
-//! - [`result`]: reading a finished run.
+//! - [`result`]: reading a finished run;
+//! - [`score`]: scoring a layout made elsewhere.
 //!
 //! The safety contract of every `unsafe extern "C"` function is the one the header states once
 //! for all (pointers are NULL or valid for the access described, handles come from this
@@ -35,6 +36,8 @@ pub mod job;
 pub mod run;
 
 pub mod result;
+
+pub mod score;
 
 use std::ffi::{c_char, CStr};
 
@@ -68,6 +71,7 @@ mod tests {
             include_str!("job.rs"),
             include_str!("run.rs"),
             include_str!("result.rs"),
+            include_str!("score.rs"),
         ];
         // Built from parts so that this test's own text is not taken for an export.
         let marker = concat!("#[no_", "mangle]");
@@ -84,6 +88,6 @@ mod tests {
             }
         }
         // handle.rs exports nothing; the count catches a module left out of the list above.
-        assert_eq!(exports, 31);
+        assert_eq!(exports, 33);
     }
 }

@@ -7,6 +7,7 @@ use super::status::{c_string, guard, guard_free, Failure, Status};
 use crate::core::{
     CandidateReport, GridMap, LayoutMetrics, RegionMetrics, SnakeReport, StopReason,
 };
+use geo::MultiPolygon;
 use std::ffi::{c_char, CString};
 
 /// The outcome of a successful run. Made by snakegrid_run() or snakegrid_run_job(), freed by
@@ -21,6 +22,7 @@ pub(crate) struct Output {
     map: GridMap,
     ids: Vec<CString>,
     cells_wkb: Vec<Vec<u8>>,
+    moved_outline_wkb: Vec<u8>,
     notes: Vec<CString>,
 }
 
@@ -33,10 +35,24 @@ impl Output {
                 .iter()
                 .map(|c| crate::wkb::from_polygon(&c.cell))
                 .collect(),
+            moved_outline_wkb: multi_polygon_wkb(&map.moved_outline),
             notes: notes.iter().map(|n| c_string(n)).collect(),
             map,
         }
     }
+}
+
+/// A multipolygon as little-endian 2D ISO WKB: the MultiPolygon header, then each part as the
+/// Polygon WKB that [`crate::wkb::from_polygon`] writes (that is the format's definition).
+fn multi_polygon_wkb(outline: &MultiPolygon<f64>) -> Vec<u8> {
+    let mut out = vec![1u8];
+    out.extend(6u32.to_le_bytes());
+    // WKB counts are 32-bit; a map's outline has a handful of parts, never 2^32.
+    out.extend((outline.0.len() as u32).to_le_bytes());
+    for polygon in &outline.0 {
+        out.extend(crate::wkb::from_polygon(polygon));
+    }
+    out
 }
 
 impl Handle for RunResult {
@@ -336,6 +352,28 @@ pub unsafe extern "C" fn snakegrid_result_cell_wkb(
         let bytes = at(&output.cells_wkb, index, "regions")?;
         wkb.write(bytes.as_ptr());
         wkb_len.write(bytes.len());
+        Ok(())
+    })
+}
+
+/// The map's outline after the Snake moved it (method.md section 6, the shape the lattice was
+/// fitted to), as little-endian 2D WKB (a MultiPolygon) in map units: `*wkb` points to
+/// `*wkb_len` bytes that belong to the result.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_moved_outline_wkb(
+    result: *const RunResult,
+    wkb: *mut *const u8,
+    wkb_len: *mut usize,
+) -> Status {
+    guard("snakegrid_result_moved_outline_wkb", || {
+        // SAFETY: a live result handle (header contract).
+        let output = unsafe { handle::get(result, "result") }?;
+        // SAFETY: NULL or writable (header contract).
+        let (wkb, wkb_len) = unsafe { (Out::new(wkb, "wkb")?, Out::new(wkb_len, "wkb_len")?) };
+        wkb.write(output.moved_outline_wkb.as_ptr());
+        wkb_len.write(output.moved_outline_wkb.len());
         Ok(())
     })
 }

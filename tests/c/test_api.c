@@ -415,6 +415,19 @@ static void check_result(const snakegrid_result *result) {
         }
     }
 
+    /* The moved outline: a little-endian MultiPolygon whose parts are Polygons. */
+    const uint8_t *outline = NULL;
+    size_t outline_len = 0;
+    CHECK_OK(snakegrid_result_moved_outline_wkb(result, &outline, &outline_len));
+    CHECK(outline != NULL && outline_len >= 9 + 13 + 4 * 16);
+    if (outline != NULL && outline_len >= 9 + 13 + 4 * 16) {
+        CHECK(outline[0] == 1 && get_u32_le(outline + 1) == 6 && get_u32_le(outline + 5) >= 1);
+        CHECK(outline[9] == 1 && get_u32_le(outline + 10) == 3);
+    }
+    size_t untouched_len = 11;
+    CHECK_FAILS(snakegrid_result_moved_outline_wkb(result, NULL, &untouched_len), SNAKEGRID_NULL_ARGUMENT);
+    CHECK(untouched_len == 11);
+
     size_t notes = 7;
     CHECK_OK(snakegrid_result_note_count(result, &notes));
     CHECK(notes == 0);
@@ -460,6 +473,78 @@ static void test_cancel(void) {
     CHECK_FAILS(snakegrid_run(regions, options, record_progress, &log, &result), SNAKEGRID_CANCELLED);
     CHECK(result == NULL);
     CHECK(log.calls == 1); /* never called again once it has said stop */
+    snakegrid_regions_free(regions);
+    snakegrid_options_free(options);
+}
+
+/* ---- scoring a layout made elsewhere ---- */
+
+/* The cells of `result` as a regions handle, each under its region's id, in reverse order (the
+ * score matches them by id), leaving out the id `skip` (NULL: none). */
+static snakegrid_regions *cells_of(const snakegrid_result *result, const char *skip) {
+    snakegrid_regions *cells = NULL;
+    size_t count = 0;
+    CHECK_OK(snakegrid_regions_new(&cells));
+    CHECK_OK(snakegrid_result_count(result, &count));
+    for (size_t k = count; k-- > 0;) {
+        const char *id = NULL;
+        const uint8_t *wkb = NULL;
+        size_t len = 0;
+        CHECK_OK(snakegrid_result_region_id(result, k, &id));
+        CHECK_OK(snakegrid_result_cell_wkb(result, k, &wkb, &len));
+        if (skip == NULL || strcmp(id, skip) != 0) CHECK_OK(snakegrid_regions_add(cells, id, wkb, len));
+    }
+    return cells;
+}
+
+static void test_score(void) {
+    snakegrid_options *options = make_options();
+    snakegrid_regions *regions = make_regions();
+    snakegrid_result *result = NULL;
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
+    if (result == NULL) return;
+
+    /* The run's own layout scores as the run measured it. */
+    snakegrid_regions *cells = cells_of(result, NULL);
+    snakegrid_layout_metrics run_layout, layout;
+    snakegrid_region_metrics per_region[REGIONS];
+    CHECK_OK(snakegrid_result_layout_metrics(result, &run_layout));
+    CHECK_OK(snakegrid_score(regions, cells, &layout, per_region, REGIONS));
+    CHECK(fabs(layout.location - run_layout.location) < 1e-9);
+    CHECK(fabs(layout.adjacent - run_layout.adjacent) < 1e-9);
+    CHECK(fabs(layout.orientation - run_layout.orientation) < 1e-9);
+    CHECK(fabs(layout.shape - run_layout.shape) < 1e-9);
+    for (size_t i = 0; i < REGIONS; i++) {
+        snakegrid_region_metrics m;
+        CHECK_OK(snakegrid_result_region_metrics(result, i, &m));
+        CHECK(fabs(m.neighbours_kept - per_region[i].neighbours_kept) < 1e-9);
+        CHECK(fabs(m.orientation_error - per_region[i].orientation_error) < 1e-9);
+    }
+    /* The per-region array is optional. */
+    CHECK_OK(snakegrid_score(regions, cells, &layout, NULL, 0));
+
+    /* Failures name the id and leave the outputs alone. */
+    snakegrid_layout_metrics untouched;
+    memset(&untouched, 0x5a, sizeof untouched);
+    snakegrid_layout_metrics before = untouched;
+    CHECK_FAILS(snakegrid_score(regions, cells, &untouched, per_region, REGIONS - 1), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("region_metrics_len");
+    snakegrid_regions *missing = cells_of(result, "r23");
+    CHECK_FAILS(snakegrid_score(regions, missing, &untouched, NULL, 0), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("r23");
+    wkb_buffer extra = {{0}, 0};
+    put_square(&extra, 0, 0, SIDE, 0);
+    CHECK_OK(snakegrid_regions_add(cells, "stray", extra.bytes, extra.len));
+    CHECK_FAILS(snakegrid_score(regions, cells, &untouched, NULL, 0), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("stray");
+    CHECK(memcmp(&untouched, &before, sizeof before) == 0);
+    CHECK_FAILS(snakegrid_score(regions, cells, NULL, NULL, 0), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_score(regions, (const snakegrid_regions *)options, &layout, NULL, 0),
+                SNAKEGRID_INVALID_HANDLE);
+
+    snakegrid_regions_free(missing);
+    snakegrid_regions_free(cells);
+    snakegrid_result_free(result);
     snakegrid_regions_free(regions);
     snakegrid_options_free(options);
 }
@@ -518,6 +603,7 @@ int main(void) {
     test_invalid_input_runs();
     test_run();
     test_cancel();
+    test_score();
     test_threads();
     return check_summary("test_api");
 }
