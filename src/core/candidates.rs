@@ -13,13 +13,20 @@ use super::{
     assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params, Progress,
     Region, RegionCell, RegionMetrics,
 };
-use geo::{Area, Coord, CoordsIter, MultiPolygon};
+use geo::{Area, Coord, CoordsIter, HasDimensions, MakeValid, MultiPolygon, Validation};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::collections::HashSet;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// How far from the layer's centre, in mean region sizes (cells), a coordinate may lie. Real
+/// layers span a few thousand cells at most; beyond this the method's arithmetic (squared
+/// distances, areas, the triangulation) loses all precision or overflows, e.g. for a
+/// needle-thin region 1e231 units long.
+const MAX_SPAN: f64 = 1e6;
 
 /// Draws of a noisy centroid before it is left where it was (a draw must land inside the outline).
 const NOISE_DRAWS: usize = 16;
@@ -31,6 +38,7 @@ pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Resu
         order,
         frame,
         prepared,
+        notes,
     } = Input::of(regions, params)?;
     let base = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
 
@@ -104,7 +112,7 @@ pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Resu
         .collect();
     let best = &layouts[ranking[0]];
     let (_, _, run) = &runs[jobs[ranking[0]].0];
-    Ok(context.grid_map(regions, &order, best, run, candidates))
+    Ok(context.grid_map(regions, &order, best, run, candidates, notes))
 }
 
 /// The regions made ready for the method: sorted by id (`order[k]` is the input index of the
@@ -113,34 +121,60 @@ pub(super) struct Input {
     pub order: Vec<usize>,
     pub frame: Frame,
     pub prepared: Prepared,
+    /// What the user should know about the input, e.g. which polygons were repaired.
+    pub notes: Vec<String>,
 }
 
 impl Input {
     pub fn of(regions: &[Region], params: &Params) -> Result<Input, Error> {
-        validate(regions)?;
+        let Checked { geometries, notes } = validate(regions)?;
         let mut order: Vec<usize> = (0..regions.len()).collect();
         order.sort_by(|&a, &b| regions[a].id.cmp(&regions[b].id));
-        let sorted: Vec<&MultiPolygon<f64>> = order.iter().map(|&i| &regions[i].geometry).collect();
+        let sorted: Vec<&MultiPolygon<f64>> = order.iter().map(|&i| &*geometries[i]).collect();
         let frame =
             Frame::of(&sorted).ok_or_else(|| Error::input(None, "the regions have no area"))?;
         let unit: Vec<MultiPolygon<f64>> =
             sorted.iter().map(|g| frame.polygons_to_unit(g)).collect();
+        if let Some(k) = unit.iter().position(|g| {
+            g.coords_iter()
+                .any(|c| !(c.x.abs() <= MAX_SPAN && c.y.abs() <= MAX_SPAN))
+        }) {
+            return Err(Error::input(
+                Some(&regions[order[k]].id),
+                format!(
+                    "the geometry reaches more than {MAX_SPAN:e} times the mean region's size \
+                     from the layer's centre: its coordinates are out of proportion"
+                ),
+            ));
+        }
         let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
         let prepared = outline::prepare(&unit_refs, params);
         Ok(Input {
             order,
             frame,
             prepared,
+            notes,
         })
     }
 }
 
-/// Refuses what the method cannot work with, naming the feature.
-fn validate(regions: &[Region]) -> Result<(), Error> {
+/// The geometries the method works on, in input order, and notes on the ones repaired.
+struct Checked<'r> {
+    geometries: Vec<Cow<'r, MultiPolygon<f64>>>,
+    notes: Vec<String>,
+}
+
+/// Refuses what the method cannot work with, naming the feature. An invalid polygon (a ring that
+/// crosses itself, a spike, overlapping parts) is repaired as GIS tools do (geo's `MakeValid`)
+/// and named in a note, because a digitising slip should not stop a map; only one with no area
+/// left is refused.
+fn validate(regions: &[Region]) -> Result<Checked<'_>, Error> {
     if regions.is_empty() {
         return Err(Error::input(None, "the layer has no regions"));
     }
     let mut seen = HashSet::new();
+    let mut notes = Vec::new();
+    let mut geometries = Vec::with_capacity(regions.len());
     for region in regions {
         let id = region.id.as_str();
         if id.is_empty() {
@@ -152,7 +186,8 @@ fn validate(regions: &[Region]) -> Result<(), Error> {
                 "the id is used by more than one region",
             ));
         }
-        if region.geometry.0.is_empty() {
+        // Also a multipolygon of polygons without points (WKB allows one).
+        if region.geometry.is_empty() {
             return Err(Error::input(Some(id), "the geometry is empty"));
         }
         if region
@@ -165,12 +200,38 @@ fn validate(regions: &[Region]) -> Result<(), Error> {
                 "the geometry has a NaN or infinite coordinate",
             ));
         }
-        // Written so that a NaN area is refused too.
-        if region.geometry.unsigned_area().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        let geometry = match region.geometry.check_validation() {
+            Ok(()) => Cow::Borrowed(&region.geometry),
+            Err(problem) => {
+                let repaired = region.geometry.make_valid().map_err(|e| {
+                    Error::input(
+                        Some(id),
+                        format!("the polygon is invalid ({problem}) and cannot be repaired: {e}"),
+                    )
+                })?;
+                if !has_area(&repaired) {
+                    return Err(Error::input(
+                        Some(id),
+                        format!("the polygon has no area (it is invalid: {problem})"),
+                    ));
+                }
+                notes.push(format!(
+                    "feature {id}: invalid polygon repaired ({problem})"
+                ));
+                Cow::Owned(repaired)
+            }
+        };
+        if !has_area(&geometry) {
             return Err(Error::input(Some(id), "the polygon has no area"));
         }
+        geometries.push(geometry);
     }
-    Ok(())
+    Ok(Checked { geometries, notes })
+}
+
+/// Written so that a NaN area counts as none.
+fn has_area(geometry: &MultiPolygon<f64>) -> bool {
+    geometry.unsigned_area().partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater)
 }
 
 /// A seed for the `k`-th draw of purpose `purpose`, so every random choice is reproducible and
@@ -359,6 +420,7 @@ impl Context<'_> {
         best: &Layout,
         run: &SnakeRun,
         candidates: Vec<CandidateReport>,
+        notes: Vec<String>,
     ) -> GridMap {
         let f = &self.frame;
         let lattice = &best.lattice;
@@ -401,6 +463,7 @@ impl Context<'_> {
             candidates,
             moved_outline: f.polygons_to_map(&best.moved_outline),
             adjacency,
+            notes,
         }
     }
 }

@@ -209,6 +209,9 @@ pub struct GridMap {
     pub moved_outline: MultiPolygon<f64>,
     /// Adjacent region pairs, as indices into the input order (i < j).
     pub adjacency: Vec<(usize, usize)>,
+    /// What the user should know about the input, e.g. "feature 06: invalid polygon repaired
+    /// (...)".
+    pub notes: Vec<String>,
 }
 
 /// Runs the whole method on `regions` (planar coordinates, unique ids) and returns the best

@@ -106,7 +106,9 @@ pub unsafe extern "C" fn snakegrid_run(
             )
         };
         let map = with_progress(progress, user_data, |p| crate::generate(list, params, p))?;
-        out.write(handle::into_raw::<RunResult>(Output::new(map, &[])));
+        // In memory there is no I/O to report on: the notes are the core's (repaired polygons).
+        let notes = map.notes.clone();
+        out.write(handle::into_raw::<RunResult>(Output::new(map, &notes)));
         Ok(())
     })
 }

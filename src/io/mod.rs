@@ -154,6 +154,7 @@ fn run_in(
         &|f| progress(write_start + WRITE_SHARE * f, "writing"),
     )?;
     let mut notes: Vec<String> = plan.note.into_iter().collect();
+    notes.extend(map.notes.iter().cloned());
     notes.extend(written.notes);
     let outcome = Outcome {
         map,
