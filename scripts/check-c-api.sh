@@ -108,6 +108,9 @@ run_valgrind() {
 run_valgrind "$work/build/test_api"
 run_valgrind "$work/build/test_header"
 run_valgrind "$work/build/test_dataset" "$us_states" "$work/out"
+mkdir -p "$work/out/bad" "$work/out/threads"
+run_valgrind "$work/build/test_bad_inputs" "$root/tests/data/bad" "$work/out/bad"
+run_valgrind "$work/build/test_threads" "$root/tests/data/bad/enclave.geojson" "$work/out/threads"
 
 step "summary"
 echo "check-c-api: $passes passed, $failures failed"

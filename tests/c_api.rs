@@ -168,6 +168,40 @@ fn the_dataset_api_matches_the_in_memory_api_on_us_states() {
     run_tests(&exe, &[&data, &out]);
 }
 
+/// A fresh output folder for one C test.
+fn output_dir(name: &str) -> PathBuf {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("c_api")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    out
+}
+
+#[test]
+fn every_bad_input_gets_a_clear_answer_through_the_c_api() {
+    let exe = compile(&c_test("test_bad_inputs.c"), &["-lm"]);
+    run_tests(
+        &exe,
+        &[
+            &root().join("tests/data/bad"),
+            &output_dir("bad-inputs-out"),
+        ],
+    );
+}
+
+#[test]
+fn eight_threads_on_independent_handles_match_a_serial_run() {
+    let exe = compile(&c_test("test_threads.c"), &["-lpthread"]);
+    run_tests(
+        &exe,
+        &[
+            &root().join("tests/data/bad/enclave.geojson"),
+            &output_dir("threads-out"),
+        ],
+    );
+}
+
 #[test]
 fn the_header_compiles_and_links_as_cpp() {
     let exe = compile(&c_test("test_header.cpp"), &[]);
@@ -192,24 +226,42 @@ fn the_header_version_macros_match_cargo_toml() {
     assert!(header.contains(&format!("#define SNAKEGRID_VERSION \"{version}\"\n")));
 }
 
-#[test]
-fn the_example_in_the_docs_compiles_and_runs_as_written() {
-    let docs = std::fs::read_to_string(root().join("docs/c-api.md")).unwrap();
-    let example = docs
+/// The first ```c block of a Markdown file of the repository, written out as `name`.
+fn c_example(markdown: &str, name: &str) -> PathBuf {
+    let text = std::fs::read_to_string(root().join(markdown)).unwrap();
+    let example = text
         .split("```c\n")
         .nth(1)
         .and_then(|rest| rest.split("```").next())
-        .expect("docs/c-api.md has a ```c example");
+        .unwrap_or_else(|| panic!("{markdown} has a ```c example"));
     let source = Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join("c_api")
-        .join("docs_example.c");
+        .join(name);
     std::fs::create_dir_all(source.parent().unwrap()).unwrap();
     std::fs::write(&source, example).unwrap();
+    source
+}
+
+#[test]
+fn the_example_in_the_docs_compiles_and_runs_as_written() {
+    let source = c_example("docs/c-api.md", "docs_example.c");
     let stdout = run(&compile(&source, &[]), &[]);
     assert!(stdout.starts_with("neighbours kept: "), "{stdout}");
     for id in ["sw", "se", "nw", "ne"] {
         assert!(stdout.contains(&format!("{id}: column ")), "{stdout}");
     }
+}
+
+#[test]
+fn the_example_in_the_readme_compiles_and_runs_as_written() {
+    let source = c_example("README.md", "readme_example.c");
+    let out = output_dir("readme-example").join("us_grid.gpkg");
+    let stdout = run(
+        &compile(&source, &[]),
+        &[&root().join("data/us_states.gpkg"), &out],
+    );
+    assert!(stdout.starts_with("C_adjacent 0."), "{stdout}");
+    assert!(out.exists(), "the example wrote its grid map");
 }
 
 #[test]

@@ -6,7 +6,8 @@ use snakegrid::core::geometry::RingIndex;
 use snakegrid::core::{forces, network, outline, snake};
 use snakegrid::io::{read_regions, Job};
 use snakegrid::{generate, score, GridMap, Params, Region, StopReason};
-use std::collections::HashSet;
+
+mod common;
 
 fn data(name: &str) -> String {
     let dir = std::env::var("SNAKEGRID_DATA")
@@ -27,36 +28,11 @@ fn run(regions: &[Region], params: &Params) -> GridMap {
     generate(regions, params, &|_, _| true).expect("a grid map")
 }
 
-/// One distinct cell per region, all equal squares of the map's cell size, none overlapping.
+/// A valid grid map (see `common`) whose squares cover exactly their count of cells, and whose
+/// outline keeps the map's shape.
 fn assert_valid_grid(regions: &[Region], map: &GridMap) {
-    assert_eq!(map.cells.len(), regions.len());
-    let ids: Vec<&str> = map.cells.iter().map(|c| c.id.as_str()).collect();
-    let expected: Vec<&str> = regions.iter().map(|r| r.id.as_str()).collect();
-    assert_eq!(ids, expected, "cells come in the input order");
-    let places: HashSet<(i32, i32)> = map.cells.iter().map(|c| (c.col, c.row)).collect();
-    assert_eq!(places.len(), regions.len(), "every region has its own cell");
+    common::assert_valid_grid(regions, map);
     let area = map.cell_size * map.cell_size;
-    for cell in &map.cells {
-        assert!(
-            (cell.cell.unsigned_area() - area).abs() < 1e-6 * area,
-            "cell {} is a full square",
-            cell.id
-        );
-        assert_eq!(cell.cell.exterior().0.len(), 5);
-    }
-    // Squares on one lattice with distinct (col, row) cannot overlap; check the lattice holds.
-    let first = &map.cells[0];
-    let origin = first.cell.exterior().0[0];
-    for cell in &map.cells {
-        let corner = cell.cell.exterior().0[0];
-        let dx = (corner.x - origin.x) / map.cell_size - f64::from(cell.col - first.col);
-        let dy = (origin.y - corner.y) / map.cell_size - f64::from(cell.row - first.row);
-        assert!(
-            dx.abs() < 1e-6 && dy.abs() < 1e-6,
-            "cell {} sits on the lattice",
-            cell.id
-        );
-    }
     let union = map
         .cells
         .iter()
@@ -66,18 +42,6 @@ fn assert_valid_grid(regions: &[Region], map: &GridMap) {
             < 1e-6 * area * regions.len() as f64
     );
     let m = map.metrics;
-    for v in [
-        m.location,
-        m.location_raw,
-        m.location_moved,
-        m.adjacent,
-        m.adjacent_rook,
-        m.orientation,
-        m.misdirected,
-        m.shape,
-    ] {
-        assert!(v.is_finite());
-    }
     assert!((0.0..=1.0).contains(&m.adjacent) && (0.0..=1.0).contains(&m.shape) && m.shape > 0.5);
     assert!((0.0..=180.0).contains(&m.orientation));
 }

@@ -1,0 +1,223 @@
+#!/usr/bin/python3
+"""Writes the corpus of bad and awkward inputs in tests/data/bad/ and its manifest, cases.tsv.
+
+Each case is one small layer (GeoJSON, written as text so NaN, unclosed rings and the like
+survive exactly; one Shapefile for non-UTF-8 text) and one manifest line:
+
+    file <TAB> id field <TAB> ok|error <TAB> text the message (error) or a note (ok) must hold
+
+("-" when there is no id field or nothing to check). tests/bad_inputs.rs and
+tests/c/test_bad_inputs.c run every line through the library, the command line and the C API.
+docs/robustness.md says why each case has the outcome it has.
+
+Usage: /usr/bin/python3 scripts/make-bad-inputs.py   (needs python3-gdal, for the Shapefile)
+"""
+
+import json
+import math
+import os
+import shutil
+
+from osgeo import ogr, osr
+
+OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "data", "bad")
+UTM33 = "urn:ogc:def:crs:EPSG::32633"
+
+
+def square(x, y, side):
+    return [[[x, y], [x + side, y], [x + side, y + side], [x, y + side], [x, y]]]
+
+
+def block(nx, ny, side=1000.0, x0=500000.0, y0=5000000.0, prefix="r"):
+    """nx × ny touching squares named r00, r01, … row by row."""
+    return [
+        feature(f"{prefix}{j}{i}", "Polygon", square(x0 + i * side, y0 + j * side, side))
+        for j in range(ny)
+        for i in range(nx)
+    ]
+
+
+def feature(code, kind, coordinates, **properties):
+    geometry = None if kind is None else {"type": kind, "coordinates": coordinates}
+    return {
+        "type": "Feature",
+        "properties": {"code": code, "name": f"region {code}", **properties},
+        "geometry": geometry,
+    }
+
+
+def geojson(name, features, crs=UTM33):
+    """GDAL takes a GeoJSON file without "crs" for WGS 84, so planar layers name theirs."""
+    layer = {"type": "FeatureCollection", "name": name.split(".")[0], "features": features}
+    if crs:
+        layer["crs"] = {"type": "name", "properties": {"name": crs}}
+    # allow_nan writes NaN and Infinity, which GDAL's GeoJSON reader accepts.
+    with open(os.path.join(OUT, name), "w", encoding="utf-8") as f:
+        json.dump(layer, f, allow_nan=True, indent=None, separators=(",", ":"))
+        f.write("\n")
+
+
+def non_utf8_shapefile(name):
+    """A Shapefile whose .cpg says UTF-8 but whose names are Latin-1, so GDAL hands the bytes
+    over unchanged: the invalid UTF-8 a mislabelled file gives."""
+    path = os.path.join(OUT, name)
+    driver = ogr.GetDriverByName("ESRI Shapefile")
+    if os.path.exists(path):
+        driver.DeleteDataSource(path)
+    srs = osr.SpatialReference()
+    srs.ImportFromEPSG(32633)
+    source = driver.CreateDataSource(path)
+    layer = source.CreateLayer(name[:-4], srs, ogr.wkbPolygon, options=["ENCODING=UTF-8"])
+    for field in ("code", "name"):
+        layer.CreateField(ogr.FieldDefn(field, ogr.OFTString))
+    for f in block(3, 2):
+        out = ogr.Feature(layer.GetLayerDefn())
+        out.SetField("code", f["properties"]["code"])
+        out.SetField("name", "Zurich " + f["properties"]["code"])
+        out.SetGeometry(ogr.CreateGeometryFromJson(json.dumps(f["geometry"])))
+        layer.CreateFeature(out)
+    source = None
+    dbf = path[:-4] + ".dbf"
+    with open(dbf, "rb") as f:
+        data = f.read()
+    # Same length, so the .dbf stays well formed: "ü" as the single Latin-1 byte 0xFC.
+    data = data.replace(b"Zurich r00", b"Z\xfcrich r00").replace(b"Zurich", b"Z\xfcrich")
+    with open(dbf, "wb") as f:
+        f.write(data)
+
+
+def main():
+    if os.path.isdir(OUT):
+        shutil.rmtree(OUT)
+    os.makedirs(OUT)
+    cases = []
+
+    def case(file, expect, text, id_field="code"):
+        cases.append((file, id_field, expect, text))
+
+    # GeoJSON keeps no schema without features, so no -id field either.
+    geojson("empty_layer.geojson", [])
+    case("empty_layer.geojson", "error", "the source layer has no features", id_field="-")
+
+    geojson("points.geojson", [feature("p1", "Point", [500000, 5000000]), feature("p2", "Point", [501000, 5000000])])
+    case("points.geojson", "error", "feature p1: the geometry is a POINT")
+
+    geojson("lines.geojson", [feature("l1", "LineString", [[500000, 5000000], [501000, 5000000]])] + block(2, 1))
+    case("lines.geojson", "error", "feature l1: the geometry is a LINESTRING")
+
+    geojson("null_geometry.geojson", block(2, 2) + [feature("nothing", None, None)])
+    case("null_geometry.geojson", "error", "feature nothing: the geometry is null")
+
+    # GDAL reads a GeoJSON polygon without coordinates as no geometry at all.
+    geojson("empty_geometry.geojson", block(2, 2) + [feature("hollow", "Polygon", [])])
+    case("empty_geometry.geojson", "error", "feature hollow: the geometry is null")
+
+    # A bow-tie: the ring crosses itself in the middle; repaired into its two triangles.
+    x, y = 502000.0, 5000000.0
+    bowtie = [[[x, y], [x + 1000, y + 1000], [x + 1000, y], [x, y + 1000], [x, y]]]
+    geojson("bowtie.geojson", block(2, 1) + [feature("bowtie", "Polygon", bowtie)])
+    case("bowtie.geojson", "ok", "feature bowtie: invalid polygon repaired")
+
+    # The ring's last point is not its first: closed on reading, as every GIS does.
+    open_ring = [square(502000, 5000000, 1000)[0][:-1]]
+    geojson("unclosed_ring.geojson", block(2, 1) + [feature("open", "Polygon", open_ring)])
+    case("unclosed_ring.geojson", "ok", "-")
+
+    # Two distinct points: no area, whatever closes it.
+    short = [[[502000, 5000000], [503000, 5000000], [502000, 5000000]]]
+    geojson("short_ring.geojson", block(2, 1) + [feature("short", "Polygon", short)])
+    case("short_ring.geojson", "error", "feature short:")
+
+    dup = square(502000, 5000000, 1000)[0]
+    dup = [dup[0], dup[1], dup[1], dup[1], dup[2], dup[3], dup[3], dup[4]]
+    geojson("duplicate_vertices.geojson", block(2, 1) + [feature("stutter", "Polygon", [dup])])
+    case("duplicate_vertices.geojson", "ok", "-")
+
+    # A region that is a line traced there and back: zero area, nothing to repair.
+    sliver = [[[502000, 5000000], [503000, 5000000], [504000, 5000000], [502000, 5000000]]]
+    geojson("zero_area_sliver.geojson", block(2, 1) + [feature("sliver", "Polygon", sliver)])
+    case("zero_area_sliver.geojson", "error", "feature sliver:")
+
+    # A good square with a zero-width spike: repaired to the square.
+    spiked = [[[502000, 5000000], [503000, 5000000], [503000, 5000500], [504000, 5000500],
+               [503000, 5000500], [503000, 5001000], [502000, 5001000], [502000, 5000000]]]
+    geojson("spike.geojson", block(2, 1) + [feature("spiked", "Polygon", spiked)])
+    case("spike.geojson", "ok", "feature spiked: invalid polygon repaired")
+
+    # Each of a row of squares overlaps the next by a fifth.
+    overlapping = [feature(f"o{i}", "Polygon", square(500000 + 800 * i, 5000000, 1000)) for i in range(4)]
+    geojson("overlapping.geojson", overlapping)
+    case("overlapping.geojson", "ok", "-")
+
+    dupes = block(2, 2)
+    dupes[3]["properties"]["code"] = "r00"
+    geojson("duplicate_ids.geojson", dupes)
+    case("duplicate_ids.geojson", "error", "feature r00: the id is not unique")
+
+    nulls = block(2, 2)
+    nulls[2]["properties"]["code"] = None
+    geojson("null_ids.geojson", nulls)
+    case("null_ids.geojson", "error", "feature FID 2: the id is null")
+
+    geojson("one_region.geojson", block(1, 1))
+    case("one_region.geojson", "ok", "-")
+
+    geojson("two_regions.geojson", block(2, 1))
+    case("two_regions.geojson", "ok", "-")
+
+    islands = [feature(f"i{j}{i}", "Polygon", square(500000 + 3000 * i, 5000000 + 3000 * j, 1000))
+               for j in range(3) for i in range(3)]
+    geojson("all_islands.geojson", islands)
+    case("all_islands.geojson", "ok", "-")
+
+    # A 3 × 3 block whose middle is a hole of the ring around it, filled by its own region.
+    outer = square(500000, 5000000, 3000)[0]
+    hole = square(501000, 5001000, 1000)[0][::-1]
+    geojson("enclave.geojson", [
+        feature("ring", "Polygon", [outer, hole]),
+        feature("enclave", "Polygon", square(501000, 5001000, 1000)),
+        feature("east", "Polygon", square(503000, 5000000, 3000)),
+    ])
+    case("enclave.geojson", "ok", "-")
+
+    geojson("large_coordinates.geojson", block(3, 3, side=100.0, x0=1.0e7, y0=1.0e7))
+    case("large_coordinates.geojson", "ok", "-")
+
+    geojson("small_coordinates.geojson", block(3, 3, side=1.0e-4, x0=1.0e-3, y0=1.0e-3))
+    case("small_coordinates.geojson", "ok", "-")
+
+    # Longitude/latitude squares from 176°E to 176°W, written as GeoJSON wants them (-180..180),
+    # so the layer's bounding box spans the whole world.
+    antimeridian = []
+    for j in range(2):
+        for i in range(4):
+            lon = 176.0 + 2.0 * i
+            lon = lon - 360.0 if lon >= 180.0 else lon
+            antimeridian.append(feature(f"a{j}{i}", "Polygon", square(lon, -20.0 + 2.0 * j, 2.0)))
+    geojson("antimeridian.geojson", antimeridian, crs="urn:ogc:def:crs:OGC:1.3:CRS84")
+    case("antimeridian.geojson", "ok", "-")
+
+    nan = square(502000, 5000000, 1000)
+    nan[0][2] = [math.nan, 5001000]
+    geojson("nan_coordinate.geojson", block(2, 1) + [feature("nan", "Polygon", nan)])
+    case("nan_coordinate.geojson", "error", "feature nan: the geometry has a NaN or infinite coordinate")
+
+    inf = square(502000, 5000000, 1000)
+    inf[0][1] = [math.inf, 5000000]
+    geojson("infinite_coordinate.geojson", block(2, 1) + [feature("inf", "Polygon", inf)])
+    case("infinite_coordinate.geojson", "error", "feature inf: the geometry has a NaN or infinite coordinate")
+
+    non_utf8_shapefile("non_utf8.shp")
+    case("non_utf8.shp", "ok", "-")
+
+    geojson("three_in_a_line.geojson", block(3, 1))
+    case("three_in_a_line.geojson", "ok", "-")
+
+    with open(os.path.join(OUT, "cases.tsv"), "w", encoding="utf-8") as f:
+        f.write("# file\tid field\texpected\ttext the error message or a note must hold (- for none)\n")
+        for c in cases:
+            f.write("\t".join(c) + "\n")
+
+
+if __name__ == "__main__":
+    main()

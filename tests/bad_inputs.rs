@@ -1,0 +1,293 @@
+//! The corpus of bad and awkward inputs in tests/data/bad/ (made by scripts/make-bad-inputs.py,
+//! listed with the expected outcome in cases.tsv) through the library and the command line;
+//! tests/c/test_bad_inputs.c runs the same manifest through the C API. Every case either gives a
+//! valid grid map or fails with a message naming the feature and the problem, and a failed or
+//! cancelled run leaves nothing at the destination.
+
+use snakegrid::io::{read_regions, run, Job};
+use snakegrid::{generate, Error, Params};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+mod common;
+
+fn corpus() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bad")
+}
+
+/// One line of cases.tsv.
+struct Case {
+    file: String,
+    id_field: Option<String>,
+    ok: bool,
+    /// What the error message (or, for a success, one of the notes) must contain.
+    text: Option<String>,
+}
+
+fn cases() -> Vec<Case> {
+    let manifest = std::fs::read_to_string(corpus().join("cases.tsv")).unwrap();
+    let cases: Vec<Case> = manifest
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|line| {
+            let columns: Vec<&str> = line.split('\t').collect();
+            assert_eq!(columns.len(), 4, "cases.tsv: {line:?}");
+            let optional = |s: &str| (s != "-").then(|| s.to_owned());
+            assert!(matches!(columns[2], "ok" | "error"), "cases.tsv: {line:?}");
+            Case {
+                file: columns[0].to_owned(),
+                id_field: optional(columns[1]),
+                ok: columns[2] == "ok",
+                text: optional(columns[3]),
+            }
+        })
+        .collect();
+    assert!(cases.len() >= 20, "the corpus is there");
+    cases
+}
+
+/// A fresh folder, removed at the end of the test.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(test: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("snakegrid-bad-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    /// Everything in the folder, staging folders (which start with a dot) included.
+    fn listing(&self) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(&self.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn job(case: &Case, dst: &Path) -> Job {
+    Job {
+        src: corpus().join(&case.file).to_string_lossy().into_owned(),
+        id_field: case.id_field.clone(),
+        dst: dst.to_string_lossy().into_owned(),
+        ..Job::default()
+    }
+}
+
+#[test]
+fn every_case_through_the_library() {
+    for case in cases() {
+        let job = job(&case, Path::new("unused.gpkg"));
+        let result = read_regions(&job).and_then(|source| {
+            let map = generate(&source.regions, &Params::default(), &|_, _| true)?;
+            Ok((source, map))
+        });
+        match (case.ok, result) {
+            (true, Ok((source, map))) => {
+                common::assert_valid_grid(&source.regions, &map);
+                if let Some(text) = &case.text {
+                    assert!(
+                        map.notes.iter().any(|n| n.contains(text.as_str())),
+                        "{}: no note holds {text:?}: {:?}",
+                        case.file,
+                        map.notes
+                    );
+                }
+            }
+            (false, Err(e)) => {
+                let message = e.to_string();
+                let expected = case.text.as_deref().unwrap_or_default();
+                assert!(
+                    message.contains(expected),
+                    "{}: {message:?} does not say {expected:?}",
+                    case.file
+                );
+            }
+            (true, Err(e)) => panic!("{}: expected a grid map, got {e}", case.file),
+            (false, Ok(_)) => panic!("{}: expected an error, got a grid map", case.file),
+        }
+    }
+}
+
+#[test]
+fn every_case_through_the_command_line() {
+    let scratch = Scratch::new("cli");
+    for case in cases() {
+        let dst = scratch.path("grid.gpkg");
+        let src = corpus().join(&case.file);
+        let mut command = Command::new(env!("CARGO_BIN_EXE_snakegrid"));
+        if let Some(id) = &case.id_field {
+            command.args(["-id", id]);
+        }
+        let output = command.arg(&dst).arg(&src).output().unwrap();
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        if case.ok {
+            assert!(output.status.success(), "{}: {stderr}", case.file);
+            assert_eq!(scratch.listing(), ["grid.gpkg"], "{}", case.file);
+            if let Some(text) = &case.text {
+                assert!(
+                    stdout.contains(&format!("note: {text}")),
+                    "{}: the summary has no note {text:?}: {stdout}",
+                    case.file
+                );
+            }
+            std::fs::remove_file(&dst).unwrap();
+        } else {
+            assert_eq!(output.status.code(), Some(1), "{}: {stderr}", case.file);
+            // Only the one error line (after the progress line it cut short), no panic text.
+            let progress = |l: &str| l.chars().all(|c| c.is_ascii_digit() || c == '.');
+            let lines: Vec<&str> = stderr
+                .lines()
+                .filter(|l| !l.trim().is_empty() && !progress(l))
+                .collect();
+            assert_eq!(lines.len(), 1, "{}: {stderr:?}", case.file);
+            let expected = case.text.as_deref().unwrap_or_default();
+            assert!(
+                lines[0].starts_with("snakegrid: ERROR: ") && lines[0].contains(expected),
+                "{}: {:?} does not say {expected:?}",
+                case.file,
+                lines[0]
+            );
+            assert!(
+                scratch.listing().is_empty(),
+                "{}: {:?}",
+                case.file,
+                scratch.listing()
+            );
+        }
+    }
+}
+
+#[test]
+fn a_failed_run_leaves_an_existing_destination_untouched_even_with_overwrite() {
+    let scratch = Scratch::new("untouched");
+    let dst = scratch.path("grid.gpkg");
+    let before = b"not a grid map, and must stay so";
+    for case in cases().iter().filter(|c| !c.ok) {
+        std::fs::write(&dst, before).unwrap();
+        let job = Job {
+            overwrite: true,
+            json_report: Some(scratch.path("r.json").to_string_lossy().into_owned()),
+            ..job(case, &dst)
+        };
+        assert!(
+            run(&job, &Params::default(), &|_, _| true).is_err(),
+            "{}",
+            case.file
+        );
+        assert_eq!(std::fs::read(&dst).unwrap(), before, "{}", case.file);
+        assert_eq!(scratch.listing(), ["grid.gpkg"], "{}", case.file);
+    }
+}
+
+#[test]
+fn a_cancelled_run_leaves_an_existing_destination_untouched_at_every_stage() {
+    let scratch = Scratch::new("cancelled");
+    let dst = scratch.path("grid.gpkg");
+    let before = b"the previous grid map";
+    let case = cases()
+        .into_iter()
+        .find(|c| c.file == "enclave.geojson")
+        .expect("the corpus has the enclave");
+    let job = Job {
+        overwrite: true,
+        svg: Some(scratch.path("p.svg").to_string_lossy().into_owned()),
+        ..job(&case, &dst)
+    };
+    // From the first report (while reading) to the last one that may still cancel (writing).
+    for after in [0.0, 0.04, 0.3, 0.9, 0.95, 0.99] {
+        std::fs::write(&dst, before).unwrap();
+        let result = run(&job, &Params::default(), &|fraction, _| fraction <= after);
+        assert_eq!(
+            result.err(),
+            Some(Error::Cancelled),
+            "cancelled after {after}"
+        );
+        assert_eq!(
+            std::fs::read(&dst).unwrap(),
+            before,
+            "cancelled after {after}"
+        );
+        assert_eq!(scratch.listing(), ["grid.gpkg"], "cancelled after {after}");
+    }
+    run(&job, &Params::default(), &|_, _| true).unwrap();
+    assert_ne!(std::fs::read(&dst).unwrap(), before);
+    assert_eq!(scratch.listing(), ["grid.gpkg", "p.svg"]);
+}
+
+#[test]
+fn a_layer_across_the_antimeridian_keeps_its_shape() {
+    // Squares a{row}{column} in two rows of four, from 176°E eastwards across 180° to 176°W.
+    let job = Job {
+        src: corpus()
+            .join("antimeridian.geojson")
+            .to_string_lossy()
+            .into_owned(),
+        id_field: Some("code".into()),
+        ..Job::default()
+    };
+    let source = read_regions(&job).unwrap();
+    assert!(
+        source.notes.iter().any(|n| n.contains("+lon_0=180.000000")),
+        "centred on the antimeridian: {:?}",
+        source.notes
+    );
+    let map = generate(&source.regions, &Params::default(), &|_, _| true).unwrap();
+    let cell = |id: &str| {
+        let c = map.cells.iter().find(|c| c.id == id).unwrap();
+        (c.col, c.row)
+    };
+    for row in 0..2 {
+        for col in 0..3 {
+            let (west, east) = (
+                cell(&format!("a{row}{col}")),
+                cell(&format!("a{row}{}", col + 1)),
+            );
+            assert!(
+                west.0 < east.0,
+                "a{row}{col} {west:?} is west of its neighbour {east:?}"
+            );
+        }
+    }
+    for col in 0..4 {
+        let (south, north) = (cell(&format!("a0{col}")), cell(&format!("a1{col}")));
+        assert!(
+            north.1 < south.1,
+            "a1{col} {north:?} is north of a0{col} {south:?}"
+        );
+    }
+}
+
+#[test]
+fn coordinates_out_of_proportion_are_refused_by_name() {
+    // Found by fuzzing (fuzz/corpus/wkb/needle_1e231): a valid polygon 3e231 units long and
+    // 1e-90 units² in area, whose unit-cell frame overflows.
+    let bytes =
+        std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/wkb/needle_1e231"))
+            .unwrap();
+    let needle = snakegrid::Region {
+        id: "needle".into(),
+        geometry: snakegrid::wkb::to_multi_polygon(&bytes).unwrap(),
+    };
+    let error = generate(&[needle], &Params::default(), &|_, _| true).unwrap_err();
+    assert!(
+        error
+            .to_string()
+            .starts_with("feature needle: the geometry reaches more than"),
+        "{error}"
+    );
+}
