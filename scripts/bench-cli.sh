@@ -2,7 +2,7 @@
 # Times the release `snakegrid` command on every layer of the shared data folder and prints a
 # table (layer, features, mean and spread of the wall time).
 #
-#   scripts/bench-cli.sh [DATA_DIR]        DATA_DIR: $SNAKEGRID_DATA, else /work/shared/data
+#   scripts/bench-cli.sh [DATA_DIR]        DATA_DIR: $SNAKEGRID_DATA, else ../shared/data beside the repository
 #
 # RUNS (default 3) runs per layer, 1 for layers over 1000 features; extra snakegrid options go
 # in SNAKEGRID_OPTS (e.g. SNAKEGRID_OPTS="-refine false"). Uses hyperfine when installed
@@ -11,7 +11,7 @@
 set -euo pipefail
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
-data=${1:-${SNAKEGRID_DATA:-/work/shared/data}}
+data=${1:-${SNAKEGRID_DATA:-$repo/../shared/data}}
 runs=${RUNS:-3}
 opts=${SNAKEGRID_OPTS:-}
 

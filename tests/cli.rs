@@ -1,58 +1,17 @@
 //! The `snakegrid` command end to end on the shared layers: outputs are read back with GDAL.
 //!
 //! Inputs are copied to a scratch folder under the system temp dir (the shared data is never
-//! written to). The data folder is `$SNAKEGRID_DATA`, else `/work/shared/data`.
+//! written to). The data folder is `$SNAKEGRID_DATA`, else `../shared/data`.
 
 use gdal::spatial_ref::SpatialRef;
 use gdal::vector::{Feature, FieldValue, Geometry, LayerAccess, LayerOptions, OGRFieldType};
 use gdal::{Dataset, DriverManager};
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-fn data(layer: &str) -> PathBuf {
-    let folder = std::env::var("SNAKEGRID_DATA").unwrap_or_else(|_| "/work/shared/data".into());
-    Path::new(&folder).join(format!("{layer}.gpkg"))
-}
-
-/// A fresh folder, removed at the end of the test.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(test: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("snakegrid-cli-{test}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn path(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-
-    /// Copies a shared layer in; returns its path.
-    fn input(&self, layer: &str) -> PathBuf {
-        let to = self.path(&format!("{layer}.gpkg"));
-        std::fs::copy(data(layer), &to).unwrap();
-        to
-    }
-
-    /// The names in the folder, sorted (staging folders start with a dot).
-    fn listing(&self) -> Vec<String> {
-        let mut names: Vec<String> = std::fs::read_dir(&self.0)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        names
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod common;
+use common::{shared_layer as data, Scratch};
 
 fn snakegrid<I, S>(args: I) -> Output
 where

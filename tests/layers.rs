@@ -9,15 +9,9 @@ use snakegrid::{generate, score, GridMap, Params, Region, StopReason};
 
 mod common;
 
-fn data(name: &str) -> String {
-    let dir = std::env::var("SNAKEGRID_DATA")
-        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data").to_owned());
-    format!("{dir}/{name}.gpkg")
-}
-
 fn load(name: &str) -> Vec<Region> {
     let job = Job {
-        src: data(name),
+        src: common::shared_layer(name).to_string_lossy().into_owned(),
         id_field: Some("id".into()),
         ..Job::default()
     };

@@ -1,9 +1,65 @@
-//! What every grid map must be, shared by the integration tests (each test file that needs it
-//! says `mod common;`).
+//! What the integration tests share (each test file says `mod common;`): where the shared
+//! layers are, scratch folders, and what every grid map must be.
+// Each test crate uses a different subset of these helpers.
+#![allow(dead_code)]
 
 use geo::Area;
 use snakegrid::{GridMap, Region};
 use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// A layer of the team's shared data: `$SNAKEGRID_DATA`, else `../shared/data` beside the
+/// repository (where CI puts it).
+pub fn shared_layer(name: &str) -> PathBuf {
+    let folder = std::env::var("SNAKEGRID_DATA")
+        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data").to_owned());
+    Path::new(&folder).join(format!("{name}.gpkg"))
+}
+
+/// A fresh folder under the system temp dir, named after the test binary and `test`, removed at
+/// the end of the test.
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    pub fn new(test: &str) -> Scratch {
+        let binary = std::env::current_exe()
+            .ok()
+            .and_then(|exe| exe.file_stem().map(|s| s.to_string_lossy().into_owned()))
+            .unwrap_or_default();
+        let dir =
+            std::env::temp_dir().join(format!("snakegrid-{binary}-{test}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    pub fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    /// Copies a shared layer in; returns its path.
+    pub fn input(&self, layer: &str) -> PathBuf {
+        let to = self.path(&format!("{layer}.gpkg"));
+        std::fs::copy(shared_layer(layer), &to).unwrap();
+        to
+    }
+
+    /// The names in the folder, sorted (staging folders, which start with a dot, included).
+    pub fn listing(&self) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(&self.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
 
 /// One distinct cell per region, in the input order, all equal squares of the map's cell size on
 /// one lattice (so distinct places cannot overlap), and finite metrics.
