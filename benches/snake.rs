@@ -3,9 +3,8 @@
 //! Cholesky replaces the paper's dense inverses), the whole Snake, and the whole method.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use geo::MultiPolygon;
-use snakegrid::core::frame::Frame;
-use snakegrid::core::{forces, network, outline, snake};
+use snakegrid::core::candidates::Input;
+use snakegrid::core::{forces, network, snake};
 use snakegrid::io::{read_regions, Job};
 use snakegrid::{generate, Params, Region};
 use std::time::Duration;
@@ -31,13 +30,7 @@ fn load(name: &str) -> Vec<Region> {
 
 /// The network the driver builds for `regions` (noise-free run).
 fn network_of(regions: &[Region], params: &Params) -> (network::Network, Vec<Vec<usize>>) {
-    let mut sorted: Vec<&MultiPolygon<f64>> = Vec::new();
-    let mut order: Vec<&Region> = regions.iter().collect();
-    order.sort_by(|a, b| a.id.cmp(&b.id));
-    sorted.extend(order.iter().map(|r| &r.geometry));
-    let frame = Frame::of(&sorted).expect("area");
-    let unit: Vec<MultiPolygon<f64>> = sorted.iter().map(|g| frame.polygons_to_unit(g)).collect();
-    let prepared = outline::prepare(&unit.iter().collect::<Vec<_>>(), params);
+    let prepared = Input::of(regions, params).expect("valid regions").prepared;
     let net =
         network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency).expect("network");
     let neighbours = forces::neighbours(&net, &prepared.adjacency);

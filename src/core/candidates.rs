@@ -117,7 +117,7 @@ pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Resu
 
 /// The regions made ready for the method: sorted by id (`order[k]` is the input index of the
 /// `k`-th), in the unit-cell frame, with centroids, adjacency and outline.
-pub(super) struct Input {
+pub struct Input {
     pub order: Vec<usize>,
     pub frame: Frame,
     pub prepared: Prepared,
