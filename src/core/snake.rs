@@ -55,6 +55,8 @@ pub fn run(
     }
     let mut solver = BeamSolver::new(network, params);
     let mut largest_forces = Vec::new();
+    // The outline at `positions`: each step's check builds it for the next step's limits.
+    let mut outline = RingIndex::new(&network.ring_coords(&positions));
     report.stop_reason = StopReason::MaxSteps;
     while report.steps < params.max_steps {
         if !keep_going() {
@@ -68,7 +70,9 @@ pub fn run(
         }
         let displacement = solver.solve(&positions, &forces)?;
         let step = scale_step(displacement, &forces, params.step_ratio);
-        let Some(applied) = apply_valid_step(network, &positions, step) else {
+        let Some((applied, applied_outline)) =
+            apply_valid_step(network, &positions, &outline, step)
+        else {
             report.stop_reason = StopReason::InvalidStep;
             break;
         };
@@ -79,6 +83,7 @@ pub fn run(
             .map(|(a, b)| length(*a - *b))
             .fold(0.0, f64::max);
         positions = applied;
+        outline = applied_outline;
         if largest_move < params.epsilon {
             report.stop_reason = StopReason::Converged;
             break;
@@ -246,17 +251,17 @@ fn scale_step(mut d: Vec<Coord<f64>>, forces: &Forces, ratio: f64) -> Vec<Coord<
 /// Applies `step` so that the outline cannot fold and no centroid can leave it. Before the step,
 /// each node is limited to a third of its clearance: a centroid's distance to the outline; an
 /// outline vertex's distance to the segments it is not part of and its own segments' distance to
-/// the nearest other node (so a long segment cannot sweep over a centroid or a vertex). Two things that are
-/// `d` apart then close by at most 2d/3. The result is checked anyway, and the step halved up to
-/// `HALVINGS` times while it is invalid. `None` when no valid step was found.
+/// the nearest other node (so a long segment cannot sweep over a centroid or a vertex). Two
+/// things that are `d` apart then close by at most 2d/3. The result is checked anyway, and the step halved up to
+/// `HALVINGS` times while it is invalid. `index` is the outline at `positions`; the result is
+/// the new positions with the outline there, or `None` when no valid step was found.
 fn apply_valid_step(
     network: &Network,
     positions: &[Coord<f64>],
+    index: &RingIndex,
     mut step: Vec<Coord<f64>>,
-) -> Option<Vec<Coord<f64>>> {
+) -> Option<(Vec<Coord<f64>>, RingIndex)> {
     let m = network.centroids;
-    let rings = network.ring_coords(positions);
-    let index = RingIndex::new(&rings);
     // Every node as a point tagged with its node index.
     let points = RTree::bulk_load(
         positions
@@ -271,7 +276,7 @@ fn apply_valid_step(
         let segment_clearance: Vec<f64> = (0..len)
             .map(|k| {
                 let ends = [ring.nodes[k], ring.nodes[(k + 1) % len]];
-                segment_to_points(rings[r][k], rings[r][(k + 1) % len], &points, |n| {
+                segment_to_points(positions[ends[0]], positions[ends[1]], &points, |n| {
                     ends.contains(&n)
                 })
             })
@@ -294,7 +299,7 @@ fn apply_valid_step(
         let moved: Vec<Coord<f64>> = positions.iter().zip(&step).map(|(p, v)| *p + *v).collect();
         let outline = RingIndex::new(&network.ring_coords(&moved));
         if !outline.self_intersects() && moved[..m].iter().all(|&c| outline.contains(c)) {
-            return Some(moved);
+            return Some((moved, outline));
         }
         for v in &mut step {
             *v = *v * 0.5;
