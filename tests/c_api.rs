@@ -203,6 +203,12 @@ fn eight_threads_on_independent_handles_match_a_serial_run() {
 }
 
 #[test]
+fn far_apart_clusters_lay_out_in_little_memory() {
+    let exe = compile(&c_test("test_clusters.c"), &[]);
+    run_tests(&exe, &[]);
+}
+
+#[test]
 fn the_header_compiles_and_links_as_cpp() {
     let exe = compile(&c_test("test_header.cpp"), &[]);
     run_tests(&exe, &[]);

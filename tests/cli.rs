@@ -8,61 +8,10 @@ use gdal::vector::{Feature, FieldValue, Geometry, LayerAccess, LayerOptions, OGR
 use gdal::{Dataset, DriverManager};
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::Path;
-use std::process::{Command, Output};
 
 mod common;
+use common::cli::{assert_fails, assert_success, p, snakegrid, stderr, stdout};
 use common::{shared_layer as data, Scratch};
-
-fn snakegrid<I, S>(args: I) -> Output
-where
-    I: IntoIterator<Item = S>,
-    S: AsRef<std::ffi::OsStr>,
-{
-    Command::new(env!("CARGO_BIN_EXE_snakegrid"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
-}
-
-fn stdout(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn assert_success(output: &Output) {
-    assert!(
-        output.status.success(),
-        "snakegrid failed: {}\n{}",
-        stderr(output),
-        stdout(output)
-    );
-}
-
-/// A failure with exit code `code` and a single line on stderr that names `needle`.
-fn assert_fails(output: &Output, code: i32, needle: &str) {
-    let err = stderr(output);
-    assert_eq!(output.status.code(), Some(code), "stderr: {err}");
-    // A progress line cut short by the error may precede the message.
-    let progress = |l: &str| l.chars().all(|c| c.is_ascii_digit() || c == '.');
-    let lines: Vec<&str> = err
-        .lines()
-        .filter(|l| !l.trim().is_empty() && !progress(l))
-        .collect();
-    assert_eq!(lines.len(), 1, "expected one line, got: {err:?}");
-    assert!(lines[0].starts_with("snakegrid: ERROR: "), "{err}");
-    assert!(
-        lines[0].contains(needle),
-        "{:?} does not mention {needle:?}",
-        lines[0]
-    );
-}
 
 /// One output feature: attributes as text and the ring of its square.
 struct Row {
@@ -523,7 +472,7 @@ fn two_runs_give_byte_identical_outputs() {
     let run = |folder: &str| {
         let dir = scratch.path(folder);
         std::fs::create_dir(&dir).unwrap();
-        let output = Command::new(env!("CARGO_BIN_EXE_snakegrid"))
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_snakegrid"))
             .current_dir(&dir)
             .args([
                 "-q",

@@ -16,6 +16,7 @@ use super::Params;
 use geo::Coord;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rustc_hash::FxHashMap;
 
 /// What the refinement needs to know of a layout, all in the unit-cell frame.
 pub struct Layout<'a> {
@@ -213,41 +214,39 @@ struct Slot {
     region: Option<usize>,
 }
 
-/// The current assignment and a dense map of the lattice positions around it.
+/// The current assignment and a map of the lattice positions it may use. The map holds only the
+/// positions of the pool and of the assigned cells, so its size follows the regions and not the
+/// empty space between them (two clusters far apart would otherwise need one slot per cell of
+/// their bounding box).
 struct Board<'a> {
     lattice: &'a Lattice,
     /// Per region, its index into `lattice.cells`.
     at: Vec<usize>,
     /// Cells with an index below this may be moved to.
     pool: usize,
-    /// Column and row of the map's first slot, and its width in slots.
-    first: (i32, i32),
-    width: usize,
-    slots: Vec<Slot>,
+    slots: FxHashMap<(i32, i32), Slot>,
 }
 
 impl<'a> Board<'a> {
     fn new(lattice: &'a Lattice, cells: &[usize], pool: usize) -> Self {
-        let known: Vec<usize> = (0..pool).chain(cells.iter().copied()).collect();
-        let (mut first, mut last) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
-        for &index in &known {
+        let mut slots = FxHashMap::default();
+        slots.reserve(pool + cells.len());
+        for index in (0..pool).chain(cells.iter().copied()) {
             let cell = lattice.cells[index];
-            first = (first.0.min(cell.col), first.1.min(cell.row));
-            last = (last.0.max(cell.col), last.1.max(cell.row));
+            slots.insert(
+                (cell.col, cell.row),
+                Slot {
+                    cell: Some(index),
+                    region: None,
+                },
+            );
         }
-        let span = |a: i32, b: i32| usize::try_from(i64::from(b) - i64::from(a) + 1).unwrap_or(0);
-        let width = span(first.0, last.0);
         let mut board = Board {
             lattice,
             at: cells.to_vec(),
             pool,
-            first,
-            width,
-            slots: vec![Slot::default(); width * span(first.1, last.1)],
+            slots,
         };
-        for &index in &known {
-            board.slot_mut(index).cell = Some(index);
-        }
         for (region, &index) in cells.iter().enumerate() {
             let slot = board.slot_mut(index);
             assert!(
@@ -259,19 +258,17 @@ impl<'a> Board<'a> {
         board
     }
 
-    /// The slot at (`col`, `row`), if the map reaches there.
+    /// The slot at (`col`, `row`), if the map holds that position.
     fn slot(&self, col: i32, row: i32) -> Option<Slot> {
-        let x = usize::try_from(i64::from(col) - i64::from(self.first.0)).ok()?;
-        let y = usize::try_from(i64::from(row) - i64::from(self.first.1)).ok()?;
-        (x < self.width).then(|| self.slots.get(y * self.width + x).copied())?
+        self.slots.get(&(col, row)).copied()
     }
 
     /// The slot of lattice cell `index`, which the map always holds.
     fn slot_mut(&mut self, index: usize) -> &mut Slot {
         let cell = self.lattice.cells[index];
-        let x = (cell.col - self.first.0) as usize;
-        let y = (cell.row - self.first.1) as usize;
-        &mut self.slots[y * self.width + x]
+        self.slots
+            .get_mut(&(cell.col, cell.row))
+            .expect("the board holds every cell it was made with")
     }
 
     /// Draws a proposal; `None` when the drawn position offers nothing (see the module notes).

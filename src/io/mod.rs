@@ -12,6 +12,7 @@
 
 mod crs;
 mod output;
+mod paths;
 mod read;
 mod report;
 mod session;
@@ -26,8 +27,9 @@ use gdal::spatial_ref::SpatialRef;
 use gdal::vector::LayerAccess;
 use gdal::vector::{Feature, Layer};
 use output::{Staged, Target};
+use paths::SourceFiles;
 use session::Session;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// One dataset-to-dataset run, as `snakegrid [options] DST SRC [SRC_LAYER]` describes it.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -102,6 +104,13 @@ fn run_in(
     };
     // Everything that can be refused without reading is refused before any work.
     let driver = write::driver(job.format.as_deref(), &job.dst)?;
+    let dataset = read::open(session, &job.src)?;
+    let source_files = SourceFiles::of(&dataset, &job.src);
+    let outputs = outputs(job);
+    for (what, path) in &outputs {
+        source_files.refuse(what, Path::new(path))?;
+    }
+    distinct_outputs(&outputs)?;
     let target = Target::check(&job.dst, "destination", job.overwrite, true)?;
     let check_extra = |path: &Option<String>, what| {
         path.as_deref()
@@ -110,9 +119,7 @@ fn run_in(
     };
     let json_target = check_extra(&job.json_report, "JSON report")?;
     let svg_target = check_extra(&job.svg, "picture")?;
-    distinct_outputs(job)?;
 
-    let dataset = read::open(session, &job.src)?;
     let mut layer = read::layer(&dataset, job.src_layer.as_deref())?;
     let source_layer = layer.name();
     let Source {
@@ -194,9 +201,9 @@ fn run_in(
         .transpose()?;
 
     // Only now does anything appear at, or disappear from, the destinations.
-    staged.commit(session, job.overwrite)?;
+    staged.commit(session, job.overwrite, &source_files)?;
     for extra in json.into_iter().chain(picture) {
-        extra.commit(session, job.overwrite)?;
+        extra.commit(session, job.overwrite, &source_files)?;
     }
     // Too late to cancel: the outputs are in place.
     progress(1.0, "done");
@@ -285,23 +292,31 @@ fn stage_text(target: Target, text: &str) -> Result<Staged, Error> {
     Ok(staged)
 }
 
-/// Refuses a run whose outputs would overwrite each other or the source.
-fn distinct_outputs(job: &Job) -> Result<(), Error> {
-    let same = |a: &str, b: &str| match (Path::new(a).canonicalize(), Path::new(b).canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => Path::new(a) == Path::new(b),
-    };
-    if same(&job.src, &job.dst) {
-        return Err(Error::Io(format!(
-            "the destination {:?} is the source",
-            job.dst
-        )));
-    }
-    let outputs = [Some(&job.dst), job.json_report.as_ref(), job.svg.as_ref()];
-    let outputs: Vec<&String> = outputs.into_iter().flatten().collect();
-    for (k, a) in outputs.iter().enumerate() {
-        if let Some(b) = outputs[k + 1..].iter().find(|b| same(a, b)) {
-            return Err(Error::Io(format!("{b:?} is given for two outputs")));
+/// The outputs a job writes, each with what it is called in messages.
+fn outputs(job: &Job) -> Vec<(&'static str, &str)> {
+    let extras = [("JSON report", &job.json_report), ("picture", &job.svg)];
+    std::iter::once(("destination", job.dst.as_str()))
+        .chain(
+            extras
+                .into_iter()
+                .filter_map(|(what, path)| Some((what, path.as_deref()?))),
+        )
+        .collect()
+}
+
+/// Refuses a run two of whose outputs are one file, however spelled.
+fn distinct_outputs(outputs: &[(&str, &str)]) -> Result<(), Error> {
+    let resolved: Vec<Vec<PathBuf>> = outputs
+        .iter()
+        .map(|(_, path)| paths::canonical(Path::new(path)))
+        .collect();
+    for (k, (what, path)) in outputs.iter().enumerate() {
+        for (other, (other_what, other_path)) in outputs.iter().enumerate().skip(k + 1) {
+            if resolved[k].iter().any(|p| resolved[other].contains(p)) {
+                return Err(Error::Io(format!(
+                    "the {what} {path:?} and the {other_what} {other_path:?} are the same file"
+                )));
+            }
         }
     }
     Ok(())

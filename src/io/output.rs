@@ -8,6 +8,7 @@
 //! old destination is removed (through its GDAL driver when it is a dataset, so sidecar files go
 //! too) only once the new one is complete.
 
+use super::paths::SourceFiles;
 use super::session::Session;
 use crate::core::Error;
 use gdal::{Dataset, DatasetOptions, DriverManager, GdalOpenFlags};
@@ -139,10 +140,20 @@ impl Staged {
 
     /// Moves the output into place, first removing what was at the destination (only present
     /// with `-overwrite`, see [`Target::check`]).
-    pub(crate) fn commit(self, session: &Session, overwrite: bool) -> Result<(), Error> {
+    /// Every file it moves is checked once more against the `source` files first: a driver may
+    /// write sidecars that the checks before the run could not foresee.
+    pub(crate) fn commit(
+        self,
+        session: &Session,
+        overwrite: bool,
+        source: &SourceFiles,
+    ) -> Result<(), Error> {
         let entries = self.entries()?;
         let folder = parent(&self.target.path);
         let shown = self.target.path.display();
+        for name in &entries {
+            source.refuse(self.target.what, &folder.join(name))?;
+        }
         match &self.target.existing {
             Existing::Nothing => {}
             Existing::Dataset(driver) => DriverManager::get_driver_by_name(driver)

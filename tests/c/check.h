@@ -35,7 +35,7 @@ static int checks_failed = 0;
     } while (0)
 
 /* The function name at the start of a call's text, e.g. "snakegrid_run" in "snakegrid_run(a)". */
-static const char *check_function_name(const char *call) {
+static inline const char *check_function_name(const char *call) {
     static char name[128];
     size_t n = strcspn(call, "(");
     if (n >= sizeof name) n = sizeof name - 1;
@@ -47,7 +47,7 @@ static const char *check_function_name(const char *call) {
 /* A message that must contain `part`. */
 #define CHECK_MESSAGE_HAS(part) CHECK(strstr(snakegrid_last_error_message(), (part)) != NULL)
 
-static int check_summary(const char *program) {
+static inline int check_summary(const char *program) {
     printf("%s: %d passed, %d failed\n", program, checks_passed, checks_failed);
     return checks_failed == 0 ? 0 : 1;
 }

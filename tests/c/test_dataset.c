@@ -19,6 +19,22 @@ static int cancel_at_once(double fraction, const char *message, void *user_data)
     return 1;
 }
 
+/* The bytes of a file (malloc'd, *size set), NULL when it cannot be read. */
+static unsigned char *file_bytes(const char *path, long *size) {
+    FILE *file = fopen(path, "rb");
+    if (file == NULL) return NULL;
+    fseek(file, 0, SEEK_END);
+    *size = ftell(file);
+    rewind(file);
+    unsigned char *bytes = malloc((size_t)*size + 1);
+    if (bytes != NULL && fread(bytes, 1, (size_t)*size, file) != (size_t)*size) {
+        free(bytes);
+        bytes = NULL;
+    }
+    fclose(file);
+    return bytes;
+}
+
 static snakegrid_job *make_job(const char *src, const char *dst) {
     snakegrid_job *job = NULL;
     CHECK_OK(snakegrid_job_new(&job));
@@ -137,8 +153,23 @@ int main(int argc, char **argv) {
     snakegrid_regions_free(regions);
     snakegrid_result_free(from_dataset);
 
-    /* Dataset errors. */
+    /* No setting may write over the source: refused before any work, the source unchanged. */
     snakegrid_result *none = NULL;
+    long size_before = 0, size_after = 0;
+    unsigned char *before = file_bytes(src, &size_before);
+    for (int k = 0; k < 2; k++) {
+        CHECK_OK(snakegrid_job_set(job, k == 0 ? "json_report" : "svg", src));
+        CHECK_FAILS(snakegrid_run_job(job, options, NULL, NULL, &none), SNAKEGRID_IO_ERROR);
+        CHECK_MESSAGE_HAS("refusing to write over the source");
+        CHECK_OK(snakegrid_job_set(job, k == 0 ? "json_report" : "svg", NULL));
+    }
+    unsigned char *after = file_bytes(src, &size_after);
+    CHECK(before != NULL && after != NULL && size_before == size_after &&
+          memcmp(before, after, (size_t)size_before) == 0);
+    free(before);
+    free(after);
+
+    /* Dataset errors. */
     CHECK_OK(snakegrid_job_set(job, "src", missing));
     CHECK_FAILS(snakegrid_run_job(job, options, NULL, NULL, &none), SNAKEGRID_IO_ERROR);
     CHECK_MESSAGE_HAS("no-such-source");

@@ -3,6 +3,8 @@
 // Each test crate uses a different subset of these helpers.
 #![allow(dead_code)]
 
+pub mod cli;
+
 use geo::Area;
 use snakegrid::{GridMap, Region};
 use std::collections::HashSet;

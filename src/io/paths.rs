@@ -1,0 +1,181 @@
+//! What a run must never write to: every file of the source dataset as GDAL lists it, compared
+//! by where the file system puts a path, not by how it is spelled. `a.shp`, `./a.shp`,
+//! `dir/../a.shp` and a symbolic link to it are all the same file; `a.dbf` is part of `a.shp`.
+
+use crate::core::Error;
+use gdal::Dataset;
+use std::ffi::CStr;
+use std::path::{Component, Path, PathBuf};
+
+/// The files of a source dataset, canonical.
+pub(crate) struct SourceFiles {
+    files: Vec<PathBuf>,
+    /// The source as the user named it, for messages.
+    shown: String,
+}
+
+impl SourceFiles {
+    /// Every file GDAL says `dataset` is made of (a Shapefile's `.shp` and all its sidecars, a
+    /// GeoPackage), with the journal files SQLite keeps beside a database (`-wal`, `-shm`,
+    /// `-journal`), and for a dataset inside an archive (`/vsizip/a.zip/...`) the archive.
+    pub(crate) fn of(dataset: &Dataset, src: &str) -> SourceFiles {
+        let mut listed = file_list(dataset);
+        if listed.is_empty() {
+            listed.push(src.to_owned());
+        }
+        let mut files = Vec::new();
+        for name in listed {
+            let path = match archive_of(&name) {
+                Some(archive) => archive,
+                None => PathBuf::from(&name),
+            };
+            for suffix in ["", "-wal", "-shm", "-journal"] {
+                let mut with = path.clone().into_os_string();
+                with.push(suffix);
+                files.extend(canonical(Path::new(&with)));
+            }
+        }
+        files.sort();
+        files.dedup();
+        SourceFiles {
+            files,
+            shown: src.to_owned(),
+        }
+    }
+
+    /// Refuses `path` (an output described as `what`) when writing it could touch a file of the
+    /// source: it is one of them, or a folder that holds one.
+    pub(crate) fn refuse(&self, what: &str, path: &Path) -> Result<(), Error> {
+        let targets = canonical(path);
+        for target in &targets {
+            if let Some(file) = self.files.iter().find(|f| f.starts_with(target)) {
+                let relation = if file == target {
+                    "is a file of"
+                } else {
+                    "is a folder that holds a file of"
+                };
+                return Err(Error::Io(format!(
+                    "the {what} {:?} {relation} the source {:?} ({}): refusing to write over \
+                     the source",
+                    path.display(),
+                    self.shown,
+                    file.display()
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The ways the file system can name `path`: the real folder it is in plus its name (which is
+/// what a new file there would be), and where it finally leads when it exists (through symbolic
+/// links). Empty only when the folder cannot be resolved either.
+pub(crate) fn canonical(path: &Path) -> Vec<PathBuf> {
+    let mut ways = Vec::new();
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match (folder.canonicalize(), path.file_name()) {
+        (Ok(real), Some(name)) => ways.push(real.join(name)),
+        _ => ways.push(lexical(path)),
+    }
+    if let Ok(real) = path.canonicalize() {
+        if !ways.contains(&real) {
+            ways.push(real);
+        }
+    }
+    ways
+}
+
+/// `path` with `.` and `..` resolved by spelling only, for paths the file system cannot resolve.
+fn lexical(path: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for part in path.components() {
+        match part {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+/// The archive of a path inside one of GDAL's archive file systems (`/vsizip/a.zip/b.shp` →
+/// `a.zip`, `/vsigzip/a.gpkg.gz` → `a.gpkg.gz`): the longest leading part that is a file.
+fn archive_of(name: &str) -> Option<PathBuf> {
+    let inner = ["/vsizip/", "/vsitar/", "/vsigzip/", "/vsi7z/"]
+        .iter()
+        .find_map(|prefix| name.strip_prefix(prefix))?;
+    // `{...}` quotes an archive path that holds the archive file system's own separators.
+    let inner = inner.trim_start_matches('{').replace('}', "");
+    let mut candidate = PathBuf::from(inner);
+    loop {
+        if candidate.is_file() {
+            return Some(candidate);
+        }
+        if !candidate.pop() {
+            return None;
+        }
+    }
+}
+
+/// GDALGetFileList: the files the driver says make up the dataset.
+fn file_list(dataset: &Dataset) -> Vec<String> {
+    // SAFETY: the dataset handle is valid while `dataset` lives; GDALGetFileList returns a new
+    // NULL-terminated list of NUL-terminated strings (or NULL), which is read and then freed
+    // with CSLDestroy, as GDAL documents.
+    unsafe {
+        let list = gdal_sys::GDALGetFileList(dataset.c_dataset());
+        let mut names = Vec::new();
+        if !list.is_null() {
+            let mut k = 0;
+            while !(*list.add(k)).is_null() {
+                names.push(CStr::from_ptr(*list.add(k)).to_string_lossy().into_owned());
+                k += 1;
+            }
+            gdal_sys::CSLDestroy(list);
+        }
+        names
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spellings_of_one_file_are_one_path() {
+        let dir = std::env::temp_dir().join(format!("snakegrid-paths-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        let file = dir.join("a.gpkg");
+        std::fs::write(&file, b"x").unwrap();
+        let link = dir.join("link.gpkg");
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink(&file, &link).unwrap();
+        let real = file.canonicalize().unwrap();
+        assert!(canonical(&dir.join("sub/../a.gpkg")).contains(&real));
+        assert!(canonical(&dir.join("./a.gpkg")).contains(&real));
+        assert!(canonical(&link).contains(&real));
+        // A file that does not exist yet: its folder resolved, its name kept.
+        assert_eq!(
+            canonical(&dir.join("sub/../new.gpkg")),
+            vec![dir.canonicalize().unwrap().join("new.gpkg")]
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn an_archive_path_names_its_archive() {
+        let dir = std::env::temp_dir().join(format!("snakegrid-zip-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let zip = dir.join("a.zip");
+        std::fs::write(&zip, b"x").unwrap();
+        let inside = format!("/vsizip/{}/layers/b.shp", zip.display());
+        assert_eq!(archive_of(&inside), Some(zip.clone()));
+        assert_eq!(archive_of("plain.shp"), None);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
