@@ -94,6 +94,47 @@ typedef uint32_t snakegrid_status;
 #endif // __cplusplus
 
 /**
+ * What kind of value an option takes (snakegrid_option::kind).
+ */
+enum snakegrid_option_kind
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  /**
+   * A finite number.
+   */
+  SNAKEGRID_OPTION_REAL = 0,
+  /**
+   * A whole number >= 0 of `integer_bits` bits.
+   */
+  SNAKEGRID_OPTION_INTEGER = 1,
+  /**
+   * "true" or "false".
+   */
+  SNAKEGRID_OPTION_BOOL = 2,
+  /**
+   * One of the names in `choices`.
+   */
+  SNAKEGRID_OPTION_CHOICE = 3,
+  /**
+   * Comma-separated numbers, `list_min` to `list_max` of them, each in the range.
+   */
+  SNAKEGRID_OPTION_REAL_LIST = 4,
+  /**
+   * Comma-separated x:y pairs, `list_min` to `list_max` of them, each number in the range.
+   */
+  SNAKEGRID_OPTION_PAIR_LIST = 5,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum snakegrid_option_kind snakegrid_option_kind;
+#else
+typedef uint32_t snakegrid_option_kind;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/**
  * Why the Snake stopped (method.md section 5).
  */
 enum snakegrid_stop_reason
@@ -155,6 +196,71 @@ typedef struct snakegrid_regions snakegrid_regions;
  * until it is freed.
  */
 typedef struct snakegrid_result snakegrid_result;
+
+/**
+ * One row of the parameter table, as every face of snakegrid shows it. Every string is static
+ * (it lives as long as the library is loaded) and UTF-8.
+ */
+typedef struct snakegrid_option {
+  /**
+   * The name snakegrid_options_set() takes.
+   */
+  const char *name;
+  snakegrid_option_kind kind;
+  /**
+   * The default, as text that snakegrid_options_set() reads back.
+   */
+  const char *default_value;
+  /**
+   * The option may be "none" (unset).
+   */
+  bool optional;
+  /**
+   * The range (of each element, for lists): `minimum` applies when `has_minimum`, and is
+   * excluded when `minimum_open`; likewise the maximum.
+   */
+  bool has_minimum;
+  double minimum;
+  bool minimum_open;
+  bool has_maximum;
+  double maximum;
+  bool maximum_open;
+  /**
+   * The range as text, e.g. "(0, 1]" or "nodal or element".
+   */
+  const char *range;
+  /**
+   * Width of an INTEGER option (32 or 64); 0 for other kinds.
+   */
+  uint32_t integer_bits;
+  /**
+   * How many elements a list takes; 0 and 0 for other kinds.
+   */
+  size_t list_min;
+  size_t list_max;
+  /**
+   * The names of a CHOICE option, separated by '|'; "" for other kinds.
+   */
+  const char *choices;
+  /**
+   * Unit of the value ("cells", "cells²", ...; "" for none).
+   */
+  const char *unit;
+  /**
+   * The step of the method it belongs to ("Snake", "Outline", ...), and a heading for it.
+   */
+  const char *group;
+  const char *group_title;
+  /**
+   * Best left alone by most users.
+   */
+  bool advanced;
+  /**
+   * One line, and a paragraph.
+   */
+  const char *summary;
+  const char *help;
+} snakegrid_option;
 
 /**
  * Progress callback: `fraction` done (0 to 1, never decreasing), a short `message` (valid only
@@ -373,6 +479,23 @@ snakegrid_status snakegrid_options_set_int(struct snakegrid_options *options,
 snakegrid_status snakegrid_options_set_bool(struct snakegrid_options *options,
                                             const char *name,
                                             bool value);
+
+/**
+ * The number of options (rows of the parameter table).
+ *
+ * Never fails. Thread safety: safe from any thread.
+ */
+size_t snakegrid_option_count(void);
+
+/**
+ * Describes option `index` (0 to snakegrid_option_count() - 1, in the table's order: grouped
+ * by the step of the method) into `*out`.
+ *
+ * Fails with SNAKEGRID_INVALID_ARGUMENT for an index out of range.
+ *
+ * Thread safety: safe from any thread.
+ */
+snakegrid_status snakegrid_option_info(size_t index, struct snakegrid_option *out);
 
 /**
  * Makes an empty regions handle and writes it to `*out`.

@@ -12,7 +12,9 @@ pub mod ffi;
 pub mod io;
 pub mod wkb;
 
+pub use crate::core::params;
+
 pub use crate::core::{
     generate, score, CandidateReport, Error, GridMap, LayoutMetrics, LoadModel, Params, Progress,
-    Region, RegionCell, RegionMetrics, SnakeReport, StopReason,
+    Region, RegionCell, RegionMetrics, SnakeReport, StopReason, PARAMETERS,
 };

@@ -67,6 +67,7 @@ fn every_case_through_the_library() {
         match (case.ok, result) {
             (true, Ok((source, map))) => {
                 common::assert_valid_grid(&source.regions, &map);
+                common::assert_ids_and_order_do_not_matter(&source.regions, &Params::default());
                 if let Some(text) = &case.text {
                     assert!(
                         map.notes.iter().any(|n| n.contains(text.as_str())),

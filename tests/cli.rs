@@ -163,14 +163,25 @@ fn help_documents_every_option_and_parameter_with_its_default() {
     ] {
         assert!(help.contains(option), "--help lacks {option}");
     }
-    for name in snakegrid::Params::names() {
-        let line = help
-            .split("--")
-            .find(|chunk| chunk.starts_with(&format!("{name} <VALUE>")))
-            .unwrap_or_else(|| panic!("--help lacks parameter {name}"));
+    // Every parameter in the table's order, under its group's heading, with its summary,
+    // range and default as the table gives them (whitespace folded, as clap wraps lines).
+    let folded: String = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    let mut at = 0;
+    for p in snakegrid::PARAMETERS {
+        let heading = folded[..]
+            .find(p.group.title())
+            .unwrap_or_else(|| panic!("no heading {}", p.group.title()));
+        let entry = format!("--{} <VALUE> {}; {}", p.name, p.summary, p.range_text());
+        let found = folded[at..]
+            .find(&entry)
+            .unwrap_or_else(|| panic!("--help lacks {entry:?} after position {at}"));
+        assert!(heading < at + found, "{} comes after its heading", p.name);
+        at += found;
+        let default = format!("[default: {}]", p.default_text());
         assert!(
-            line.contains("[default: "),
-            "parameter {name} has no default in --help"
+            folded[at..].split("--").nth(1).unwrap().contains(&default),
+            "{} shows {default}",
+            p.name
         );
     }
     // ogr2ogr spelling works for help too.
@@ -208,6 +219,35 @@ fn a_bad_parameter_value_is_a_usage_error() {
     let output = snakegrid(["-alpha", "-1", p(&scratch.path("out.gpkg")), p(&src)]);
     assert_fails(&output, 2, "alpha");
     assert_eq!(scratch.listing(), ["us_states.gpkg"]);
+    // Values that once passed and then failed deep inside the Snake are refused by name before
+    // the source is even opened (it does not exist here).
+    let missing = scratch.path("no-such-source.gpkg");
+    for (name, value, message) in [
+        (
+            "alpha",
+            "1e308",
+            "parameter alpha must be in [0.001, 1000], got 1e308",
+        ),
+        (
+            "beta",
+            "1e308",
+            "parameter beta must be in [0.001, 1000], got 1e308",
+        ),
+        (
+            "spring",
+            "1e-300",
+            "parameter spring must be in [0.0001, 1], got 1e-300",
+        ),
+        ("alpha", "nan", "parameter alpha: expected a finite number"),
+    ] {
+        let output = snakegrid([
+            &format!("-{name}"),
+            value,
+            p(&scratch.path("out.gpkg")),
+            p(&missing),
+        ]);
+        assert_fails(&output, 2, message);
+    }
 }
 
 #[test]

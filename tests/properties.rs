@@ -5,7 +5,8 @@
 
 use geo::{Area, Coord, LineString, MultiPolygon, Polygon};
 use proptest::prelude::*;
-use snakegrid::{generate, GridMap, LoadModel, Params, Region};
+use snakegrid::params::{Kind, Parameter};
+use snakegrid::{generate, GridMap, Params, Region, PARAMETERS};
 use std::collections::HashMap;
 
 mod common;
@@ -91,62 +92,82 @@ fn points(count: std::ops::RangeInclusive<usize>) -> impl Strategy<Value = Vec<C
     })
 }
 
-/// Parameters drawn from their documented ranges, kept short where they only cost time.
+/// The most a drawn parameter takes where more only costs time.
+fn cheap(name: &str) -> Option<f64> {
+    match name {
+        "max_steps" => Some(30.0),
+        "refine_moves" => Some(4000.0),
+        "refine_swap_only_below" => Some(40.0),
+        _ => None,
+    }
+}
+
+/// A number in `p`'s range from `u` in [0, 1): log-uniform over wide positive ranges, so that
+/// both ends of α's [0.001, 1000] are drawn.
+fn in_range(p: &Parameter, u: f64) -> f64 {
+    let low = p.min.map_or(-1e3, |b| b.value);
+    let high = cheap(p.name)
+        .or(p.max.map(|b| b.value))
+        .unwrap_or(1e3)
+        .min(1e6);
+    let v = if low > 0.0 && high / low > 100.0 {
+        (low.ln() + u * (high.ln() - low.ln())).exp()
+    } else {
+        low + u * (high - low)
+    };
+    // Open ends and integer kinds stay inside the range.
+    let v = v.clamp(low, high);
+    match p.kind {
+        Kind::Integer { .. } => v.floor(),
+        _ if p.min.is_some_and(|b| b.open && v <= b.value) => just_above(low),
+        _ if p.max.is_some_and(|b| b.open && v >= b.value) => high * (1.0 - 1e-9),
+        _ => v,
+    }
+}
+
+/// The smallest drawn value above an open lower end.
+fn just_above(low: f64) -> f64 {
+    if low == 0.0 {
+        1e-6
+    } else {
+        low * (1.0 + 1e-9)
+    }
+}
+
+/// Parameters drawn from the parameter table's ranges (so a new parameter is drawn without
+/// touching this test), kept short where they only cost time: each parameter takes its value
+/// from a few uniform numbers.
 fn params() -> impl Strategy<Value = Params> {
-    let snake = (
-        0.1..10.0f64,
-        0.1..10.0f64,
-        0.01..=1.0f64,
-        1e-4..0.1f64,
-        0..=30usize,
-        1.0..10.0f64,
-        1e-3..0.1f64,
-        any::<bool>(),
-        prop_oneof![Just(LoadModel::Nodal), Just(LoadModel::Element)],
-    );
-    let outline = (
-        0.5..4.0f64,
-        prop::option::of(0.0..0.5f64),
-        any::<bool>(),
-        prop::collection::vec((0.0..1.0f64, 0.0..1.0f64), 1..=4),
-        prop::collection::vec(0.0..=0.1f64, 0..=2),
-        any::<u64>(),
-        [0.0..2.0f64, 0.1..2.0f64, 0.0..2.0f64, 0.0..2.0f64],
-    );
-    let refine = (
-        any::<bool>(),
-        0..=4000usize,
-        0.0..1.0f64,
-        [0.0..2.0f64, 0.0..2.0f64, 0.0..2.0f64, 0.0..2.0f64],
-        1.0..2.0f64,
-        0..=40usize,
-    );
-    (snake, outline, refine).prop_map(|(s, o, r)| Params {
-        alpha: s.0,
-        beta: s.1,
-        force_cap: s.2,
-        epsilon: s.3,
-        max_steps: s.4,
-        step_ratio: s.5,
-        spring: s.6,
-        stop_on_no_progress: s.7,
-        load_model: s.8,
-        vertices_per_region: o.0,
-        simplify_tolerance: o.1,
-        point_adjacency: o.2,
-        shifts: o.3.into_iter().map(|(x, y)| [x, y]).collect(),
-        noise_levels: o.4,
-        seed: o.5,
-        topsis_weights: o.6,
-        refine: r.0,
-        refine_moves: r.1,
-        refine_temperature: r.2,
-        refine_w_adjacent: r.3[0],
-        refine_w_angle: r.3[1],
-        refine_w_misdirected: r.3[2],
-        refine_w_location: r.3[3],
-        refine_cell_ratio: r.4,
-        refine_swap_only_below: r.5,
+    const DRAWS: usize = 9;
+    prop::collection::vec(0.0..1.0f64, PARAMETERS.len() * DRAWS).prop_map(|u| {
+        let mut params = Params::default();
+        for (p, u) in PARAMETERS.iter().zip(u.chunks(DRAWS)) {
+            let text = match p.kind {
+                Kind::Bool => (u[0] < 0.5).to_string(),
+                Kind::Choice(names) => names[(u[0] * names.len() as f64) as usize].to_owned(),
+                Kind::Real if p.optional && u[1] < 0.3 => "none".to_owned(),
+                Kind::Real | Kind::Integer { .. } => format!("{:?}", in_range(p, u[0])),
+                Kind::RealList { min, max } | Kind::PairList { min, max } => {
+                    let most = max.min(min.max(2));
+                    let count = min + (u[0] * (most - min + 1) as f64) as usize;
+                    let pairs = matches!(p.kind, Kind::PairList { .. });
+                    let value = |k: usize| format!("{:?}", in_range(p, u[1 + k]));
+                    (0..count.min(4))
+                        .map(|k| {
+                            if pairs {
+                                format!("{}:{}", value(2 * k), value(2 * k + 1))
+                            } else {
+                                value(k)
+                            }
+                        })
+                        .collect::<Vec<_>>()
+                        .join(",")
+                }
+            };
+            // A draw the cross-field checks refuse (all ranking weights 0) keeps the default.
+            let _ = params.set(p.name, &text);
+        }
+        params
     })
 }
 
@@ -233,5 +254,64 @@ proptest! {
         params in params(),
     ) {
         check(&points, &order, &params);
+    }
+}
+
+/// The corners of the box of α, β and κ (the parameter table's ranges) lay out us_states and a
+/// 2,000-region Voronoi layer: the ranges are ones over which the stiffness matrix stays
+/// definite.
+#[test]
+fn every_corner_of_the_snake_ranges_lays_out_real_and_large_layers() {
+    let bundled = concat!(env!("CARGO_MANIFEST_DIR"), "/data/us_states.gpkg");
+    let us_states = snakegrid::io::read_regions(&snakegrid::io::Job {
+        src: bundled.into(),
+        id_field: Some("id".into()),
+        ..Default::default()
+    })
+    .unwrap()
+    .regions;
+    let points: Vec<Coord<f64>> = (0..2000)
+        .map(|k| {
+            // A low-discrepancy (Halton 2, 3) point set: spread like random points, reproducible.
+            let halton = |mut i: usize, base: usize| {
+                let (mut f, mut r) = (1.0, 0.0);
+                while i > 0 {
+                    f /= base as f64;
+                    r += f * (i % base) as f64;
+                    i /= base;
+                }
+                r
+            };
+            Coord {
+                x: SIDE * halton(k + 1, 2),
+                y: SIDE * halton(k + 1, 3),
+            }
+        })
+        .collect();
+    let voronoi = voronoi(&points);
+    let bound = |name: &str| {
+        let p = snakegrid::params::parameter(name).unwrap();
+        [p.min.unwrap().value, p.max.unwrap().value]
+    };
+    for alpha in bound("alpha") {
+        for beta in bound("beta") {
+            for spring in bound("spring") {
+                let params = Params {
+                    alpha,
+                    beta,
+                    spring,
+                    refine: false,
+                    shifts: vec![[0.0, 0.0]],
+                    noise_levels: vec![],
+                    ..Params::default()
+                };
+                for regions in [&us_states, &voronoi] {
+                    let map = generate(regions, &params, &|_, _| true).unwrap_or_else(|e| {
+                        panic!("alpha {alpha}, beta {beta}, spring {spring}: {e}")
+                    });
+                    common::assert_valid_grid(regions, &map);
+                }
+            }
+        }
     }
 }

@@ -1,7 +1,7 @@
 //! The whole method (method.md §7): one noise-free and a few noisy Snake runs, a lattice with
 //! every origin shift on each, assignment and refinement, metrics, TOPSIS ranking. Candidates are
 //! independent and computed in parallel; the result does not depend on the order of the input
-//! regions, because everything works on the regions sorted by id.
+//! regions or their ids, because everything works on the regions in a geometric order.
 
 use super::frame::Frame;
 use super::grid::{self, Lattice};
@@ -13,7 +13,7 @@ use super::{
     assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params, Progress,
     Region, RegionCell, RegionMetrics,
 };
-use geo::{Area, Coord, CoordsIter, HasDimensions, MakeValid, MultiPolygon, Validation};
+use geo::{Area, Centroid, Coord, CoordsIter, HasDimensions, MakeValid, MultiPolygon, Validation};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -115,7 +115,7 @@ pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Resu
     Ok(context.grid_map(regions, &order, best, run, candidates, notes))
 }
 
-/// The regions made ready for the method: sorted by id (`order[k]` is the input index of the
+/// The regions made ready for the method: in their geometric order (`order[k]` is the input index of the
 /// `k`-th), in the unit-cell frame, with centroids, adjacency and outline.
 pub struct Input {
     pub order: Vec<usize>,
@@ -128,8 +128,7 @@ pub struct Input {
 impl Input {
     pub fn of(regions: &[Region], params: &Params) -> Result<Input, Error> {
         let Checked { geometries, notes } = validate(regions)?;
-        let mut order: Vec<usize> = (0..regions.len()).collect();
-        order.sort_by(|&a, &b| regions[a].id.cmp(&regions[b].id));
+        let order = geometric_order(regions, &geometries);
         let sorted: Vec<&MultiPolygon<f64>> = order.iter().map(|&i| &*geometries[i]).collect();
         let frame =
             Frame::of(&sorted).ok_or_else(|| Error::input(None, "the regions have no area"))?;
@@ -156,6 +155,34 @@ impl Input {
             notes,
         })
     }
+}
+
+/// The regions' indices ordered by their geometry alone, so that renaming ids or reordering
+/// features moves no cell: by area centroid (x, then y), then area, then smallest vertex; the id
+/// decides only between identical geometries.
+fn geometric_order(regions: &[Region], geometries: &[Cow<MultiPolygon<f64>>]) -> Vec<usize> {
+    let keys: Vec<(Coord<f64>, f64, Coord<f64>)> = geometries
+        .iter()
+        .map(|g| {
+            let centroid = g.centroid().map_or(Coord { x: 0.0, y: 0.0 }, |p| p.0);
+            let smallest = g
+                .coords_iter()
+                .min_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)))
+                .unwrap_or(centroid);
+            (centroid, g.unsigned_area(), smallest)
+        })
+        .collect();
+    let mut order: Vec<usize> = (0..regions.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (ka, kb) = (&keys[a], &keys[b]);
+        (ka.0.x.total_cmp(&kb.0.x))
+            .then(ka.0.y.total_cmp(&kb.0.y))
+            .then(ka.1.total_cmp(&kb.1))
+            .then(ka.2.x.total_cmp(&kb.2.x))
+            .then(ka.2.y.total_cmp(&kb.2.y))
+            .then_with(|| regions[a].id.cmp(&regions[b].id))
+    });
+    order
 }
 
 /// The geometries the method works on, in input order, and notes on the ones repaired.

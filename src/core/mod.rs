@@ -27,7 +27,7 @@ use geo::{Coord, MultiPolygon, Polygon};
 use serde::Serialize;
 use std::fmt;
 
-pub use params::{LoadModel, Params};
+pub use params::{LoadModel, Params, PARAMETERS};
 pub use score::score;
 
 /// One input region: a unique id and its (multi)polygon in a planar CRS.

@@ -1,12 +1,16 @@
-//! Every tunable number of the method, with its default and its valid range.
+//! Every tunable number of the method in one table ([`PARAMETERS`]): name, kind, range, unit,
+//! group and help. Parsing, validation, the command line's `--help`, the C API's option table,
+//! `docs/c-api.md` and the QGIS dialog are all derived from it, so they cannot disagree. The
+//! defaults live once, in [`Params::default`].
 //!
 //! Lengths are in cells (the unit-cell frame of method.md §0), so the defaults hold for data in
 //! metres, feet or degrees alike.
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
+use std::fmt::Write;
 
 /// How the Snake turns centroid forces into loads (method.md §4, "known weakness").
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LoadModel {
     /// The paper's element loads (h/2·f, h²/12·f): long edges pull harder.
@@ -16,60 +20,35 @@ pub enum LoadModel {
     Nodal,
 }
 
-/// The parameters of one run. `Params::default()` is what the command line uses.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+/// The parameters of one run. `Params::default()` is what every face uses; [`PARAMETERS`]
+/// describes each field.
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Params {
-    /// α, the beams' elasticity (resistance to stretching). > 0.
     pub alpha: f64,
-    /// β, the beams' rigidity (resistance to bending). > 0.
     pub beta: f64,
-    /// T_f, the force cap in cells (Eq. 7). (0, 1].
     pub force_cap: f64,
-    /// ε, the Snake stops when no node moves more than this many cells in a step. > 0.
-    pub epsilon: f64,
-    /// T_s, the most Snake steps. 0 disables the Snake (the centroids stay where they are).
     pub max_steps: usize,
-    /// R: no node moves more than R times the largest force in one step. ≥ 1.
+    pub epsilon: f64,
     pub step_ratio: f64,
-    /// κ as a fraction of the mean displacement stiffness: the weak spring that makes K definite.
     pub spring: f64,
-    /// Stop when the largest uncapped force has not fallen for 3 steps (§5, condition 2).
     pub stop_on_no_progress: bool,
-    /// How forces become loads.
     pub load_model: LoadModel,
-    /// Outline vertices kept per region by the simplification (N_boundary ≈ this × M). > 0.
     pub vertices_per_region: f64,
-    /// Simplification tolerance in cells² (Visvalingam area); overrides `vertices_per_region`.
     pub simplify_tolerance: Option<f64>,
-    /// Regions that touch at a single point count as adjacent.
     pub point_adjacency: bool,
-    /// Lattice origin shifts (x right, y down) as fractions of a cell: one candidate each (§7).
     pub shifts: Vec<[f64; 2]>,
-    /// Noise levels MD for the noisy candidates (§7); 0 is always run as well. Each ≥ 0.
     pub noise_levels: Vec<f64>,
-    /// Seed of every random choice (noise and refinement).
     pub seed: u64,
-    /// TOPSIS weights for C_location, C_adjacent, C_orientation, C_shape. Each ≥ 0, not all 0.
-    pub topsis_weights: [f64; 4],
-    /// The adjacency-aware refinement of §6b.
     pub refine: bool,
-    /// Simulated-annealing moves of the refinement.
     pub refine_moves: usize,
-    /// Starting temperature of the refinement (falls linearly to 0).
     pub refine_temperature: f64,
-    /// Weight of an adjacent pair whose cells are not 8-neighbours.
     pub refine_w_adjacent: f64,
-    /// Weight of the angle error of an adjacent pair, per 90°.
     pub refine_w_angle: f64,
-    /// Weight of an adjacent pair misdirected by more than 45°.
     pub refine_w_misdirected: f64,
-    /// Weight of a region's squared distance from its moved centroid, per cell².
     pub refine_w_location: f64,
-    /// Free cells offered to the refinement, as a multiple of M (from the best by score).
     pub refine_cell_ratio: f64,
-    /// Up to this many regions, the refinement only swaps cells, so the outline keeps its shape.
     pub refine_swap_only_below: usize,
+    pub topsis_weights: [f64; 4],
 }
 
 impl Default for Params {
@@ -78,8 +57,8 @@ impl Default for Params {
             alpha: 1.0,
             beta: 1.0,
             force_cap: 0.1,
-            epsilon: 1e-3,
             max_steps: 30,
+            epsilon: 1e-3,
             step_ratio: 5.0,
             spring: 1e-2,
             stop_on_no_progress: false,
@@ -90,7 +69,6 @@ impl Default for Params {
             shifts: vec![[0.0, 0.0], [0.0, 0.5], [0.5, 0.0], [0.5, 0.5]],
             noise_levels: vec![0.02, 0.04],
             seed: 0,
-            topsis_weights: [1.0; 4],
             refine: true,
             refine_moves: 40_000,
             refine_temperature: 0.5,
@@ -100,158 +78,814 @@ impl Default for Params {
             refine_w_location: 0.25,
             refine_cell_ratio: 1.3,
             refine_swap_only_below: 20,
+            topsis_weights: [1.0; 4],
         }
     }
 }
 
-impl Params {
-    /// Checks every value against its documented range; the message names the parameter.
-    pub fn validate(&self) -> Result<(), String> {
-        fn positive(name: &str, v: f64) -> Result<(), String> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!(
-                    "parameter {name} must be a finite number > 0, got {v}"
-                ))
+/// Which step of the method a parameter belongs to, in the order of the method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Group {
+    Snake,
+    Outline,
+    Candidates,
+    Refinement,
+    Ranking,
+}
+
+impl Group {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Group::Snake => "Snake",
+            Group::Outline => "Outline",
+            Group::Candidates => "Candidates",
+            Group::Refinement => "Refinement",
+            Group::Ranking => "Ranking",
+        }
+    }
+
+    /// What the group is, for headings.
+    pub fn title(self) -> &'static str {
+        match self {
+            Group::Snake => {
+                "Snake: the beam network that moves centroids and outline (method.md §3–5)"
             }
+            Group::Outline => "Outline and adjacency (method.md §1)",
+            Group::Candidates => "Candidate layouts (method.md §7)",
+            Group::Refinement => "Refinement after the assignment (method.md §6b)",
+            Group::Ranking => "Ranking of the candidates (method.md §7)",
         }
-        fn non_negative(name: &str, v: f64) -> Result<(), String> {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(format!(
-                    "parameter {name} must be a finite number >= 0, got {v}"
-                ))
+    }
+}
+
+/// What values a parameter takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A finite number.
+    Real,
+    /// A whole number of `bits` bits, unsigned.
+    Integer { bits: u32 },
+    /// `true` or `false`.
+    Bool,
+    /// One of the names.
+    Choice(&'static [&'static str]),
+    /// Comma-separated numbers, each in the range, `min..=max` of them.
+    RealList { min: usize, max: usize },
+    /// Comma-separated `x:y` pairs, each number in the range, `min..=max` of them.
+    PairList { min: usize, max: usize },
+}
+
+impl Kind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Kind::Real => "real",
+            Kind::Integer { .. } => "integer",
+            Kind::Bool => "bool",
+            Kind::Choice(_) => "choice",
+            Kind::RealList { .. } => "real list",
+            Kind::PairList { .. } => "pair list",
+        }
+    }
+}
+
+/// One end of a range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bound {
+    pub value: f64,
+    /// The end itself is excluded.
+    pub open: bool,
+}
+
+const fn closed(value: f64) -> Option<Bound> {
+    Some(Bound { value, open: false })
+}
+
+const fn open(value: f64) -> Option<Bound> {
+    Some(Bound { value, open: true })
+}
+
+/// A parameter's value, of its [`Kind`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Value {
+    Real(f64),
+    Integer(u64),
+    Bool(bool),
+    Choice(&'static str),
+    Reals(Vec<f64>),
+    Pairs(Vec<[f64; 2]>),
+    /// An optional parameter left unset.
+    Unset,
+}
+
+impl Value {
+    /// The value as text that [`Params::set`] reads back (the default shown in every face).
+    pub fn to_text(&self) -> String {
+        let number = |v: f64| format!("{v}");
+        match self {
+            Value::Real(v) => number(*v),
+            Value::Integer(v) => v.to_string(),
+            Value::Bool(v) => v.to_string(),
+            Value::Choice(v) => (*v).to_owned(),
+            Value::Reals(v) => v.iter().map(|&x| number(x)).collect::<Vec<_>>().join(","),
+            Value::Pairs(v) => v
+                .iter()
+                .map(|[x, y]| format!("{}:{}", number(*x), number(*y)))
+                .collect::<Vec<_>>()
+                .join(","),
+            Value::Unset => "none".to_owned(),
+        }
+    }
+}
+
+/// One row of the parameter table.
+pub struct Parameter {
+    pub name: &'static str,
+    pub kind: Kind,
+    /// It may be left unset (`none`).
+    pub optional: bool,
+    /// The range of the value (of each element for lists); `None`: unbounded on that side.
+    pub min: Option<Bound>,
+    pub max: Option<Bound>,
+    /// Unit of the value ("cells", "cells²", "°", ""); lengths are in cells (§0).
+    pub unit: &'static str,
+    pub group: Group,
+    /// Best left alone by most users (QGIS shows it under "Advanced").
+    pub advanced: bool,
+    /// One line, for lists and tooltips.
+    pub summary: &'static str,
+    /// What it does and when to change it.
+    pub help: &'static str,
+    access: Accessors,
+}
+
+/// Reading and writing a parameter's field of [`Params`].
+type Accessors = (fn(&Params) -> Value, fn(&mut Params, Value));
+
+impl Parameter {
+    /// The parameter's value in `params`.
+    pub fn value(&self, params: &Params) -> Value {
+        (self.access.0)(params)
+    }
+
+    /// Its default, as text.
+    pub fn default_text(&self) -> String {
+        self.value(&Params::default()).to_text()
+    }
+
+    /// The range as mathematicians write it, e.g. "(0, 1]", "[1, ∞)"; for lists, of each element.
+    pub fn range_text(&self) -> String {
+        match self.kind {
+            Kind::Bool => return "true or false".into(),
+            Kind::Choice(names) => return names.join(" or "),
+            _ => {}
+        }
+        let lower = match self.min {
+            Some(b) => format!("{}{}", if b.open { "(" } else { "[" }, b.value),
+            None => "(-∞".into(),
+        };
+        let upper = match (self.max, self.kind) {
+            (Some(b), _) => format!("{}{}", b.value, if b.open { ")" } else { "]" }),
+            (None, Kind::Integer { bits }) => format!("2^{bits} - 1]"),
+            (None, _) => "∞)".into(),
+        };
+        let range = format!("{lower}, {upper}");
+        match self.kind {
+            Kind::RealList { min, max } | Kind::PairList { min, max } => {
+                let count = if min == max {
+                    format!("{min}")
+                } else {
+                    format!("{min} to {max}")
+                };
+                let items = if matches!(self.kind, Kind::PairList { .. }) {
+                    "x:y pairs"
+                } else {
+                    "numbers"
+                };
+                format!("{count} {items}, each in {range}")
             }
+            _ => range,
         }
-        positive("alpha", self.alpha)?;
-        positive("beta", self.beta)?;
-        positive("force_cap", self.force_cap)?;
-        if self.force_cap > 1.0 {
-            return Err(format!(
-                "parameter force_cap must be at most 1 cell, got {}",
-                self.force_cap
-            ));
-        }
-        positive("epsilon", self.epsilon)?;
-        positive("step_ratio", self.step_ratio)?;
-        if self.step_ratio < 1.0 {
-            return Err(format!(
-                "parameter step_ratio must be >= 1, got {}",
-                self.step_ratio
-            ));
-        }
-        positive("spring", self.spring)?;
-        positive("vertices_per_region", self.vertices_per_region)?;
-        if let Some(t) = self.simplify_tolerance {
-            non_negative("simplify_tolerance", t)?;
-        }
-        if self.shifts.is_empty() {
-            return Err("parameter shifts must hold at least one shift".into());
-        }
-        for s in &self.shifts {
-            for v in s {
-                if !(v.is_finite() && (0.0..1.0).contains(v)) {
-                    return Err(format!(
-                        "parameter shifts: each shift must be in [0, 1), got {v}"
-                    ));
-                }
+    }
+
+    /// Whether `v` lies in the range.
+    fn admits(&self, v: f64) -> bool {
+        let above = self
+            .min
+            .is_none_or(|b| if b.open { v > b.value } else { v >= b.value });
+        let below = self
+            .max
+            .is_none_or(|b| if b.open { v < b.value } else { v <= b.value });
+        v.is_finite() && above && below
+    }
+
+    /// Checks `value` against the kind and the range; the message names the parameter.
+    fn check(&self, value: &Value) -> Result<(), String> {
+        let name = self.name;
+        let out_of_range =
+            |v: String| format!("parameter {name} must be in {}, got {v}", self.range_text());
+        match value {
+            Value::Unset if self.optional => Ok(()),
+            Value::Unset => Err(format!("parameter {name} cannot be none")),
+            // Debug prints the shortest text that reads back as the value: 1e308, not 309 digits.
+            Value::Real(v) if !self.admits(*v) => Err(out_of_range(format!("{v:?}"))),
+            Value::Integer(v) if !self.admits(*v as f64) => Err(out_of_range(v.to_string())),
+            Value::Reals(items) => self.check_list(items.iter().copied(), items.len()),
+            Value::Pairs(items) => {
+                self.check_list(items.iter().flat_map(|p| p.iter().copied()), items.len())
             }
+            _ => Ok(()),
         }
-        for &n in &self.noise_levels {
-            non_negative("noise_levels", n)?;
-            if n > 1.0 {
+    }
+
+    fn check_list(&self, items: impl Iterator<Item = f64>, count: usize) -> Result<(), String> {
+        let name = self.name;
+        if let Kind::RealList { min, max } | Kind::PairList { min, max } = self.kind {
+            if !(min..=max).contains(&count) {
                 return Err(format!(
-                    "parameter noise_levels: each level must be at most 1, got {n}"
+                    "parameter {name} takes {}, got {count}",
+                    self.range_text()
                 ));
             }
         }
-        for &w in &self.topsis_weights {
-            non_negative("topsis_weights", w)?;
-        }
-        if self.topsis_weights.iter().all(|&w| w == 0.0) {
-            return Err("parameter topsis_weights must not all be 0".into());
-        }
-        non_negative("refine_temperature", self.refine_temperature)?;
-        non_negative("refine_w_adjacent", self.refine_w_adjacent)?;
-        non_negative("refine_w_angle", self.refine_w_angle)?;
-        non_negative("refine_w_misdirected", self.refine_w_misdirected)?;
-        non_negative("refine_w_location", self.refine_w_location)?;
-        positive("refine_cell_ratio", self.refine_cell_ratio)?;
-        if self.refine_cell_ratio < 1.0 {
-            return Err(format!(
-                "parameter refine_cell_ratio must be >= 1, got {}",
-                self.refine_cell_ratio
-            ));
+        for v in items {
+            if !self.admits(v) {
+                return Err(format!(
+                    "parameter {name}: each value must be in {}, got {v:?}",
+                    self.range_text()
+                        .rsplit("each in ")
+                        .next()
+                        .unwrap_or_default()
+                ));
+            }
         }
         Ok(())
     }
-}
 
-impl Params {
-    /// The names `set` accepts, alphabetically.
-    pub fn names() -> Vec<String> {
-        match serde_json::to_value(Params::default()) {
-            Ok(serde_json::Value::Object(fields)) => fields.keys().cloned().collect(),
-            _ => Vec::new(),
-        }
-    }
-
-    /// Sets one parameter by name from text, as the command line and the C API receive it:
-    /// numbers, `true`/`false`, `element`/`nodal`, comma-separated lists (`0.02,0.04`), shifts as
-    /// `x:y` pairs (`0:0,0.5:0.5`), and `none` to clear the simplification tolerance. The new
-    /// value is range-checked; on error nothing changes and the message names the parameter.
-    pub fn set(&mut self, name: &str, value: &str) -> Result<(), String> {
-        use serde_json::Value;
-        let mut all = serde_json::to_value(&*self).map_err(|e| e.to_string())?;
-        let fields = all.as_object_mut().ok_or("parameters are not an object")?;
-        let current = fields
-            .get(name)
-            .ok_or_else(|| format!("unknown parameter {name:?}"))?;
-        let bad = |what: &str| format!("parameter {name}: {what}, got {value:?}");
-        let number = |text: &str| -> Result<Value, String> {
-            let v: f64 = text.trim().parse().map_err(|_| bad("expected a number"))?;
-            serde_json::Number::from_f64(v)
-                .map(Value::Number)
-                .ok_or_else(|| bad("expected a finite number"))
+    /// Reads `text` as a value of this parameter's kind (not yet range-checked).
+    fn parse(&self, text: &str) -> Result<Value, String> {
+        let name = self.name;
+        let text = text.trim();
+        let bad = |what: &str| format!("parameter {name}: {what}, got {text:?}");
+        let number = |part: &str| -> Result<f64, String> {
+            let v: f64 = part.trim().parse().map_err(|_| bad("expected a number"))?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(bad("expected a finite number"))
+            }
         };
-        let text = value.trim();
-        let parsed = match current {
-            // Only an optional parameter takes it; any other refuses it when read back below.
-            _ if text.eq_ignore_ascii_case("none") => Value::Null,
-            Value::Bool(_) => Value::Bool(match text.to_ascii_lowercase().as_str() {
+        if self.optional && text.eq_ignore_ascii_case("none") {
+            return Ok(Value::Unset);
+        }
+        Ok(match self.kind {
+            Kind::Real => Value::Real(number(text)?),
+            Kind::Integer { bits } => {
+                // A whole-number real (12.0) is accepted too: hosts often hold numbers as doubles.
+                let whole = |t: &str| {
+                    t.parse::<u64>().ok().or_else(|| {
+                        let v: f64 = t.parse().ok()?;
+                        (v >= 0.0 && v.fract() == 0.0 && v < 2f64.powi(64)).then_some(v as u64)
+                    })
+                };
+                let v = whole(text).ok_or_else(|| bad("expected a whole number >= 0"))?;
+                if bits < 64 && v >> bits != 0 {
+                    return Err(bad(&format!("expected a whole number below 2^{bits}")));
+                }
+                Value::Integer(v)
+            }
+            Kind::Bool => Value::Bool(match text.to_ascii_lowercase().as_str() {
                 "true" | "yes" | "on" | "1" => true,
                 "false" | "no" | "off" | "0" => false,
                 _ => return Err(bad("expected true or false")),
             }),
-            Value::String(_) => Value::String(text.to_ascii_lowercase()),
-            Value::Number(n) if n.is_u64() => Value::from(
-                text.parse::<u64>()
-                    .map_err(|_| bad("expected a whole number >= 0"))?,
+            Kind::Choice(names) => Value::Choice(
+                names
+                    .iter()
+                    .find(|n| n.eq_ignore_ascii_case(text))
+                    .ok_or_else(|| bad(&format!("expected {}", names.join(" or "))))?,
             ),
-            Value::Number(_) | Value::Null => number(text)?,
-            Value::Array(items)
-                if matches!(items.first(), Some(Value::Array(_))) || name == "shifts" =>
-            {
-                let pairs = text.split(',').map(|pair| {
-                    let (x, y) = pair
-                        .split_once(':')
-                        .ok_or_else(|| bad("expected x:y pairs"))?;
-                    Ok(Value::Array(vec![number(x)?, number(y)?]))
-                });
-                Value::Array(pairs.collect::<Result<_, String>>()?)
+            Kind::RealList { .. } if text.is_empty() => Value::Reals(Vec::new()),
+            Kind::RealList { .. } => {
+                Value::Reals(text.split(',').map(number).collect::<Result<_, _>>()?)
             }
-            Value::Array(_) if text.is_empty() => Value::Array(Vec::new()),
-            Value::Array(_) => Value::Array(text.split(',').map(number).collect::<Result<_, _>>()?),
-            Value::Object(_) => return Err(bad("cannot be set from text")),
-        };
-        fields.insert(name.to_owned(), parsed);
-        let candidate: Params = serde_json::from_value(all).map_err(|e| bad(&e.to_string()))?;
-        candidate.validate()?;
-        *self = candidate;
+            Kind::PairList { .. } => Value::Pairs(
+                text.split(',')
+                    .map(|pair| {
+                        let (x, y) = pair
+                            .split_once(':')
+                            .ok_or_else(|| bad("expected x:y pairs"))?;
+                        Ok([number(x)?, number(y)?])
+                    })
+                    .collect::<Result<_, String>>()?,
+            ),
+        })
+    }
+}
+
+/// Shorthand for the table's accessors: `accessors!(name, Variant)` reads and writes `Params::name`
+/// as `Value::Variant`.
+macro_rules! accessors {
+    ($field:ident, Real) => {
+        (
+            |p| Value::Real(p.$field),
+            |p, v| {
+                if let Value::Real(v) = v {
+                    p.$field = v
+                }
+            },
+        )
+    };
+    ($field:ident, Integer) => {
+        (
+            |p| Value::Integer(p.$field as u64),
+            |p, v| {
+                if let Value::Integer(v) = v {
+                    // The range check has kept the value within the field's type.
+                    p.$field = v.try_into().unwrap_or_default()
+                }
+            },
+        )
+    };
+    ($field:ident, Bool) => {
+        (
+            |p| Value::Bool(p.$field),
+            |p, v| {
+                if let Value::Bool(v) = v {
+                    p.$field = v
+                }
+            },
+        )
+    };
+}
+
+/// Every parameter, grouped by the step of the method it belongs to, in the method's order.
+///
+/// The ranges of α, β and κ are those over which every corner of the box lays out the shared
+/// us_states layer and a 2,000-region Voronoi layer (tests/properties.rs checks it); wider values
+/// make the stiffness matrix numerically singular.
+pub static PARAMETERS: &[Parameter] = &[
+    Parameter {
+        name: "alpha",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(1e-3),
+        max: closed(1e3),
+        unit: "",
+        group: Group::Snake,
+        advanced: false,
+        summary: "Beam elasticity α (resistance to stretching)",
+        help: "How strongly each network edge resists a change of length. Only the ratio α:β \
+             matters to the shape of a step; raise α to keep distances, raise β to keep the \
+             outline smooth.",
+        access: accessors!(alpha, Real),
+    },
+    Parameter {
+        name: "beta",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(1e-3),
+        max: closed(1e3),
+        unit: "",
+        group: Group::Snake,
+        advanced: false,
+        summary: "Beam rigidity β (resistance to bending)",
+        help: "How strongly each network edge resists bending: higher values move neighbouring \
+             nodes more alike.",
+        access: accessors!(beta, Real),
+    },
+    Parameter {
+        name: "force_cap",
+        kind: Kind::Real,
+        optional: false,
+        min: open(0.0),
+        max: closed(1.0),
+        unit: "cells",
+        group: Group::Snake,
+        advanced: false,
+        summary: "Force cap T_f (Eq. 7)",
+        help: "The largest force on a centroid in one step; all forces are scaled so the largest \
+             is at most this.",
+        access: accessors!(force_cap, Real),
+    },
+    Parameter {
+        name: "max_steps",
+        kind: Kind::Integer { bits: 32 },
+        optional: false,
+        min: closed(0.0),
+        max: closed(10_000.0),
+        unit: "steps",
+        group: Group::Snake,
+        advanced: false,
+        summary: "Most Snake steps T_s",
+        help: "The Snake stops after this many steps at the latest; 0 switches it off (the \
+             centroids stay where they are).",
+        access: accessors!(max_steps, Integer),
+    },
+    Parameter {
+        name: "epsilon",
+        kind: Kind::Real,
+        optional: false,
+        min: open(0.0),
+        max: closed(1.0),
+        unit: "cells",
+        group: Group::Snake,
+        advanced: true,
+        summary: "Convergence threshold ε",
+        help: "The Snake stops when no node moves more than this in a step.",
+        access: accessors!(epsilon, Real),
+    },
+    Parameter {
+        name: "step_ratio",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(1.0),
+        max: closed(100.0),
+        unit: "",
+        group: Group::Snake,
+        advanced: true,
+        summary: "Step ratio R",
+        help: "No node moves more than R times the largest force in one step.",
+        access: accessors!(step_ratio, Real),
+    },
+    Parameter {
+        name: "spring",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(1e-4),
+        max: closed(1.0),
+        unit: "",
+        group: Group::Snake,
+        advanced: true,
+        summary: "Weak spring κ, as a fraction of the mean stiffness",
+        help: "Anchors every node to where it is, so the stiffness matrix is definite without \
+             pinning a node; below about 1e-3 the whole network drifts.",
+        access: accessors!(spring, Real),
+    },
+    Parameter {
+        name: "stop_on_no_progress",
+        kind: Kind::Bool,
+        optional: false,
+        min: None,
+        max: None,
+        unit: "",
+        group: Group::Snake,
+        advanced: true,
+        summary: "Stop when the forces stall",
+        help: "Stop the Snake when the largest force has not fallen for 3 steps (method.md §5, \
+             condition 2).",
+        access: accessors!(stop_on_no_progress, Bool),
+    },
+    Parameter {
+        name: "load_model",
+        kind: Kind::Choice(&["nodal", "element"]),
+        optional: false,
+        min: None,
+        max: None,
+        unit: "",
+        group: Group::Snake,
+        advanced: true,
+        summary: "How forces become loads",
+        help:
+            "nodal: each centroid's force at its own node, so small crowded regions move as much \
+             as large ones; element: the paper's loads along the edges (long edges pull harder).",
+        access: (
+            |p| {
+                Value::Choice(match p.load_model {
+                    LoadModel::Nodal => "nodal",
+                    LoadModel::Element => "element",
+                })
+            },
+            |p, v| {
+                if let Value::Choice(name) = v {
+                    p.load_model = if name == "element" {
+                        LoadModel::Element
+                    } else {
+                        LoadModel::Nodal
+                    }
+                }
+            },
+        ),
+    },
+    Parameter {
+        name: "vertices_per_region",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(0.1),
+        max: closed(1000.0),
+        unit: "",
+        group: Group::Outline,
+        advanced: true,
+        summary: "Outline vertices kept per region",
+        help: "The map outline is simplified to about this many vertices per region before it \
+             joins the network (the paper's ratio of 0.5 centroids per boundary node is 2).",
+        access: accessors!(vertices_per_region, Real),
+    },
+    Parameter {
+        name: "simplify_tolerance",
+        kind: Kind::Real,
+        optional: true,
+        min: closed(0.0),
+        max: closed(100.0),
+        unit: "cells²",
+        group: Group::Outline,
+        advanced: true,
+        summary: "Outline simplification tolerance",
+        help: "Visvalingam area tolerance of the outline simplification; when given, it \
+             overrides vertices_per_region. none: from vertices_per_region.",
+        access: (
+            |p| p.simplify_tolerance.map_or(Value::Unset, Value::Real),
+            |p, v| {
+                p.simplify_tolerance = match v {
+                    Value::Real(v) => Some(v),
+                    _ => None,
+                }
+            },
+        ),
+    },
+    Parameter {
+        name: "point_adjacency",
+        kind: Kind::Bool,
+        optional: false,
+        min: None,
+        max: None,
+        unit: "",
+        group: Group::Outline,
+        advanced: false,
+        summary: "Regions touching at a point are neighbours",
+        help: "Queen adjacency (a shared point is enough) instead of rook (a shared border line).",
+        access: accessors!(point_adjacency, Bool),
+    },
+    Parameter {
+        name: "shifts",
+        kind: Kind::PairList { min: 1, max: 16 },
+        optional: false,
+        min: closed(0.0),
+        max: open(1.0),
+        unit: "cells",
+        group: Group::Candidates,
+        advanced: true,
+        summary: "Lattice origin shifts",
+        help: "Shifts x:y of the lattice's origin (x right, y down), as fractions of a cell: one \
+             candidate layout each (Strategy 2).",
+        access: (
+            |p| Value::Pairs(p.shifts.clone()),
+            |p, v| {
+                if let Value::Pairs(v) = v {
+                    p.shifts = v
+                }
+            },
+        ),
+    },
+    Parameter {
+        name: "noise_levels",
+        kind: Kind::RealList { min: 0, max: 8 },
+        optional: false,
+        min: closed(0.0),
+        max: closed(1.0),
+        unit: "",
+        group: Group::Candidates,
+        advanced: true,
+        summary: "Centroid noise levels",
+        help: "Noise levels MD of the extra Snake runs (Strategy 1): each moves every centroid by \
+             Gaussian noise of MD times its mean neighbour distance; the noise-free run is \
+             always made.",
+        access: (
+            |p| Value::Reals(p.noise_levels.clone()),
+            |p, v| {
+                if let Value::Reals(v) = v {
+                    p.noise_levels = v
+                }
+            },
+        ),
+    },
+    Parameter {
+        name: "seed",
+        kind: Kind::Integer { bits: 64 },
+        optional: false,
+        min: closed(0.0),
+        max: None,
+        unit: "",
+        group: Group::Candidates,
+        advanced: false,
+        summary: "Random seed",
+        help: "Seed of every random choice (noise, refinement): the same seed gives the same map.",
+        access: accessors!(seed, Integer),
+    },
+    Parameter {
+        name: "refine",
+        kind: Kind::Bool,
+        optional: false,
+        min: None,
+        max: None,
+        unit: "",
+        group: Group::Refinement,
+        advanced: false,
+        summary: "Adjacency-aware refinement",
+        help: "Improve the assignment by swapping and moving cells so that neighbours stay \
+             neighbours and directions hold (method.md §6b); false gives the paper's method.",
+        access: accessors!(refine, Bool),
+    },
+    Parameter {
+        name: "refine_moves",
+        kind: Kind::Integer { bits: 32 },
+        optional: false,
+        min: closed(0.0),
+        max: closed(1e9),
+        unit: "moves",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Refinement moves",
+        help: "Simulated-annealing moves of the refinement.",
+        access: accessors!(refine_moves, Integer),
+    },
+    Parameter {
+        name: "refine_temperature",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(0.0),
+        max: closed(100.0),
+        unit: "",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Refinement temperature",
+        help: "Starting temperature of the annealing, falling linearly to 0; 0 accepts only \
+             improvements.",
+        access: accessors!(refine_temperature, Real),
+    },
+    Parameter {
+        name: "refine_w_adjacent",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(0.0),
+        max: closed(100.0),
+        unit: "",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Refinement weight: lost neighbour",
+        help: "Cost of an adjacent pair whose cells are not 8-neighbours.",
+        access: accessors!(refine_w_adjacent, Real),
+    },
+    Parameter {
+        name: "refine_w_angle",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(0.0),
+        max: closed(100.0),
+        unit: "",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Refinement weight: direction",
+        help: "Cost of an adjacent pair's direction error, per 90°.",
+        access: accessors!(refine_w_angle, Real),
+    },
+    Parameter {
+        name: "refine_w_misdirected",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(0.0),
+        max: closed(100.0),
+        unit: "",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Refinement weight: misdirected pair",
+        help: "Cost of an adjacent pair whose direction is off by more than 45°.",
+        access: accessors!(refine_w_misdirected, Real),
+    },
+    Parameter {
+        name: "refine_w_location",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(0.0),
+        max: closed(100.0),
+        unit: "",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Refinement weight: distance",
+        help: "Cost of a region's squared distance from its moved centroid, per cell².",
+        access: accessors!(refine_w_location, Real),
+    },
+    Parameter {
+        name: "refine_cell_ratio",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(1.0),
+        max: closed(10.0),
+        unit: "",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Free cells offered to the refinement",
+        help: "The refinement may move regions into the best cells by coverage score, this many \
+             times the number of regions.",
+        access: accessors!(refine_cell_ratio, Real),
+    },
+    Parameter {
+        name: "refine_swap_only_below",
+        kind: Kind::Integer { bits: 32 },
+        optional: false,
+        min: closed(0.0),
+        max: closed(1e9),
+        unit: "regions",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Swap-only refinement for fewer regions than this",
+        help: "With fewer regions than this, the refinement only swaps cells, so the layout's \
+             outline keeps its shape (moves to free cells can cost a small map its outline).",
+        access: accessors!(refine_swap_only_below, Integer),
+    },
+    Parameter {
+        name: "topsis_weights",
+        kind: Kind::RealList { min: 4, max: 4 },
+        optional: false,
+        min: closed(0.0),
+        max: closed(1e6),
+        unit: "",
+        group: Group::Ranking,
+        advanced: true,
+        summary: "Ranking weights",
+        help: "TOPSIS weights of C_location, C_adjacent, C_orientation and C_shape when ranking \
+             the candidates; not all 0.",
+        access: (
+            |p| Value::Reals(p.topsis_weights.to_vec()),
+            |p, v| {
+                if let Value::Reals(v) = v {
+                    if let Ok(w) = v.try_into() {
+                        p.topsis_weights = w
+                    }
+                }
+            },
+        ),
+    },
+];
+
+/// The table row of `name`.
+pub fn parameter(name: &str) -> Option<&'static Parameter> {
+    PARAMETERS.iter().find(|p| p.name == name)
+}
+
+impl Params {
+    /// Checks every value against its range in [`PARAMETERS`]; the message names the parameter.
+    pub fn validate(&self) -> Result<(), String> {
+        for parameter in PARAMETERS {
+            parameter.check(&parameter.value(self))?;
+        }
+        if self.topsis_weights.iter().all(|&w| w == 0.0) {
+            return Err("parameter topsis_weights must not all be 0".into());
+        }
         Ok(())
     }
+
+    /// The names `set` accepts, in the table's order.
+    pub fn names() -> impl Iterator<Item = &'static str> {
+        PARAMETERS.iter().map(|p| p.name)
+    }
+
+    /// Sets one parameter by name from text, as the command line and the C API receive it:
+    /// numbers, `true`/`false`, choice names, comma-separated lists (`0.02,0.04`), shifts as
+    /// `x:y` pairs (`0:0,0.5:0.5`), and `none` to clear an optional value. The new value is
+    /// range-checked; on error nothing changes and the message names the parameter.
+    pub fn set(&mut self, name: &str, text: &str) -> Result<(), String> {
+        let parameter = parameter(name).ok_or_else(|| format!("unknown parameter {name:?}"))?;
+        let value = parameter.parse(text)?;
+        parameter.check(&value)?;
+        let mut changed = self.clone();
+        (parameter.access.1)(&mut changed, value);
+        changed.validate()?;
+        *self = changed;
+        Ok(())
+    }
+}
+
+/// The parameter table as Markdown (docs/c-api.md holds it; a test keeps the copy current):
+/// one table per group, in the table's order.
+pub fn markdown() -> String {
+    let mut out = String::new();
+    let groups = [
+        Group::Snake,
+        Group::Outline,
+        Group::Candidates,
+        Group::Refinement,
+        Group::Ranking,
+    ];
+    for group in groups {
+        let _ = writeln!(out, "**{}**\n", group.title());
+        out.push_str("| option | kind | default | range | unit | what it does |\n");
+        out.push_str("|---|---|---|---|---|---|\n");
+        for p in PARAMETERS.iter().filter(|p| p.group == group) {
+            let _ = writeln!(
+                out,
+                "| `{}` | {} | `{}` | {} | {} | {}. {} |",
+                p.name,
+                p.kind.as_str(),
+                p.default_text(),
+                p.range_text(),
+                p.unit,
+                p.summary,
+                p.help
+            );
+        }
+        out.push('\n');
+    }
+    out
 }
 
 #[cfg(test)]
@@ -259,8 +893,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn defaults_are_valid() {
-        Params::default().validate().unwrap();
+    fn defaults_are_valid_and_round_trip_through_their_text() {
+        let defaults = Params::default();
+        defaults.validate().unwrap();
+        let mut p = Params::default();
+        for parameter in PARAMETERS {
+            p.set(parameter.name, &parameter.default_text()).unwrap();
+        }
+        assert_eq!(p, defaults);
     }
 
     #[test]
@@ -273,6 +913,7 @@ mod tests {
         p.set("noise_levels", "0.01, 0.03").unwrap();
         p.set("shifts", "0:0,0.25:0.75").unwrap();
         p.set("simplify_tolerance", "0.2").unwrap();
+        p.set("seed", "18446744073709551615").unwrap();
         assert_eq!(p.alpha, 2.5);
         assert_eq!(p.max_steps, 12);
         assert!(!p.refine);
@@ -280,34 +921,77 @@ mod tests {
         assert_eq!(p.noise_levels, vec![0.01, 0.03]);
         assert_eq!(p.shifts, vec![[0.0, 0.0], [0.25, 0.75]]);
         assert_eq!(p.simplify_tolerance, Some(0.2));
+        assert_eq!(p.seed, u64::MAX);
         p.set("simplify_tolerance", "none").unwrap();
         assert_eq!(p.simplify_tolerance, None);
+        p.set("noise_levels", "").unwrap();
+        assert!(p.noise_levels.is_empty());
     }
 
     #[test]
     fn set_refuses_unknown_names_and_bad_values_and_keeps_the_old_value() {
         let mut p = Params::default();
-        let err = p.set("gamma", "1").unwrap_err();
-        assert!(err.contains("unknown parameter \"gamma\""), "{err}");
-        let err = p.set("alpha", "-1").unwrap_err();
-        assert!(err.contains("alpha"), "{err}");
-        let err = p.set("max_steps", "1.5").unwrap_err();
-        assert!(err.contains("max_steps"), "{err}");
-        let err = p.set("load_model", "springs").unwrap_err();
-        assert!(err.contains("load_model"), "{err}");
-        let err = p.set("shifts", "0.5").unwrap_err();
-        assert!(err.contains("x:y"), "{err}");
+        let cases = [
+            ("gamma", "1", "unknown parameter \"gamma\""),
+            ("alpha", "-1", "alpha must be in [0.001, 1000]"),
+            (
+                "alpha",
+                "1e308",
+                "alpha must be in [0.001, 1000], got 1e308",
+            ),
+            ("beta", "1e308", "beta must be in"),
+            ("spring", "1e-300", "spring must be in [0.0001, 1]"),
+            ("alpha", "nan", "alpha: expected a finite number"),
+            ("force_cap", "0", "force_cap must be in (0, 1]"),
+            ("max_steps", "1.5", "max_steps: expected a whole number"),
+            ("max_steps", "4294967296", "below 2^32"),
+            ("load_model", "springs", "expected nodal or element"),
+            ("shifts", "0.5", "expected x:y pairs"),
+            ("shifts", "0:1", "each value must be in [0, 1)"),
+            ("shifts", "", "expected x:y pairs"),
+            ("topsis_weights", "1,1", "takes 4 numbers"),
+            ("topsis_weights", "0,0,0,0", "must not all be 0"),
+            ("alpha", "none", "expected a number"),
+            ("refine", "maybe", "expected true or false"),
+        ];
+        for (name, value, message) in cases {
+            let err = p.set(name, value).unwrap_err();
+            assert!(err.contains(message), "{name} {value}: {err}");
+            assert!(err.contains(name), "{err} names {name}");
+        }
         assert_eq!(p, Params::default());
     }
 
     #[test]
-    fn names_lists_every_field() {
-        let names = Params::names();
-        assert!(names.iter().any(|n| n == "alpha"));
-        assert!(names.iter().any(|n| n == "refine_swap_only_below"));
-        for n in &names {
-            let err = Params::default().set(n, "x").unwrap_err();
-            assert!(err.contains(n.as_str()), "{err}");
+    fn the_table_lists_every_field_once_with_help_and_a_range() {
+        let names: Vec<&str> = Params::names().collect();
+        let mut unique = names.clone();
+        unique.sort_unstable();
+        unique.dedup();
+        assert_eq!(unique.len(), names.len(), "no name twice");
+        // Every field of Params appears in its serialised form, and only those.
+        let serialised = serde_json::to_value(Params::default()).unwrap();
+        let fields = serialised.as_object().unwrap();
+        assert_eq!(fields.len(), names.len());
+        for p in PARAMETERS {
+            assert!(fields.contains_key(p.name), "{} is a field", p.name);
+            assert!(!p.summary.is_empty() && !p.help.is_empty());
+            assert!(!p.range_text().is_empty());
+            assert!(
+                !p.summary.contains("up to"),
+                "{}: the range says which end",
+                p.name
+            );
         }
+    }
+
+    #[test]
+    fn ranges_show_their_open_and_closed_ends() {
+        let range = |name| parameter(name).unwrap().range_text();
+        assert_eq!(range("force_cap"), "(0, 1]");
+        assert_eq!(range("alpha"), "[0.001, 1000]");
+        assert_eq!(range("seed"), "[0, 2^64 - 1]");
+        assert_eq!(range("shifts"), "1 to 16 x:y pairs, each in [0, 1)");
+        assert_eq!(range("load_model"), "nodal or element");
     }
 }

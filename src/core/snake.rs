@@ -188,8 +188,17 @@ impl<'a> BeamSolver<'a> {
                 s
             }
         };
-        let llt = Llt::try_new_with_symbolic(symbolic, matrix.as_ref(), Side::Lower)
-            .map_err(|e| Error::Internal(format!("the stiffness matrix is not definite: {e:?}")))?;
+        // The ranges of α, β and κ keep K definite on real layers; if rounding still defeats the
+        // factorisation, the parameters are what the user can change.
+        let llt =
+            Llt::try_new_with_symbolic(symbolic, matrix.as_ref(), Side::Lower).map_err(|_| {
+                Error::InvalidParameter(format!(
+                    "parameters alpha {}, beta {} and spring {} make the Snake's stiffness \
+                     matrix singular on this layer: choose alpha and beta nearer 1 or a larger \
+                     spring",
+                    self.alpha, self.beta, self.spring
+                ))
+            })?;
         let solution = llt.solve(&load);
         Ok((0..n)
             .map(|i| Coord {

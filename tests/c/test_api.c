@@ -254,6 +254,46 @@ static void test_options(void) {
     snakegrid_options_free(options);
 }
 
+/* The parameter table: every option described, its default accepted back, its range enforced
+ * at both ends, and values that once failed deep inside the Snake refused by name. */
+static void test_option_table(void) {
+    snakegrid_options *options = NULL;
+    CHECK_OK(snakegrid_options_new(&options));
+    size_t count = snakegrid_option_count();
+    CHECK(count >= 25);
+    int found_alpha = 0;
+    for (size_t i = 0; i < count; i++) {
+        snakegrid_option option;
+        CHECK_OK(snakegrid_option_info(i, &option));
+        CHECK(option.name != NULL && option.summary[0] != '\0' && option.help[0] != '\0');
+        CHECK(option.group[0] != '\0' && option.range[0] != '\0');
+        CHECK_OK(snakegrid_options_set(options, option.name, option.default_value));
+        if (strcmp(option.name, "alpha") == 0) {
+            found_alpha = 1;
+            CHECK(option.kind == SNAKEGRID_OPTION_REAL && option.has_minimum && option.has_maximum);
+            CHECK(!option.minimum_open && !option.maximum_open);
+            CHECK_OK(snakegrid_options_set_double(options, "alpha", option.minimum));
+            CHECK_OK(snakegrid_options_set_double(options, "alpha", option.maximum));
+            CHECK_FAILS(snakegrid_options_set_double(options, "alpha", option.maximum * 1.01), SNAKEGRID_INVALID_OPTION);
+        }
+        if (option.kind == SNAKEGRID_OPTION_CHOICE) CHECK(strchr(option.choices, '|') != NULL);
+        if (option.kind == SNAKEGRID_OPTION_INTEGER) CHECK(option.integer_bits == 32 || option.integer_bits == 64);
+    }
+    CHECK(found_alpha);
+    snakegrid_option option;
+    CHECK_FAILS(snakegrid_option_info(count, &option), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_FAILS(snakegrid_option_info(0, NULL), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_options_set(options, "alpha", "1e308"), SNAKEGRID_INVALID_OPTION);
+    CHECK_MESSAGE_HAS("alpha must be in [0.001, 1000]");
+    CHECK_FAILS(snakegrid_options_set(options, "beta", "1e308"), SNAKEGRID_INVALID_OPTION);
+    CHECK_FAILS(snakegrid_options_set(options, "spring", "1e-300"), SNAKEGRID_INVALID_OPTION);
+    CHECK_MESSAGE_HAS("spring");
+    CHECK_FAILS(snakegrid_options_set(options, "alpha", "nan"), SNAKEGRID_INVALID_OPTION);
+    /* A whole-number double is fine for an integer option (hosts often hold numbers as doubles). */
+    CHECK_OK(snakegrid_options_set_double(options, "max_steps", 12.0));
+    snakegrid_options_free(options);
+}
+
 /* ---- regions ---- */
 
 static void test_bad_regions(void) {
@@ -599,6 +639,7 @@ int main(void) {
     test_null_arguments();
     test_wrong_handles();
     test_options();
+    test_option_table();
     test_bad_regions();
     test_invalid_input_runs();
     test_run();

@@ -6,7 +6,7 @@
 pub mod cli;
 
 use geo::Area;
-use snakegrid::{GridMap, Region};
+use snakegrid::{generate, GridMap, Params, Region, RegionCell};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
@@ -117,4 +117,52 @@ pub fn assert_valid_grid(regions: &[Region], map: &GridMap) {
             cell.id
         );
     }
+}
+
+/// `regions` with every id renamed and the features in another order.
+pub fn renamed_and_shuffled(regions: &[Region]) -> Vec<Region> {
+    let mut other: Vec<Region> = regions
+        .iter()
+        .enumerate()
+        // Renamed so that the sorted order of the ids is reversed, not merely shifted.
+        .map(|(k, r)| Region {
+            id: format!("z{:06}-{}", regions.len() - k, r.id),
+            geometry: r.geometry.clone(),
+        })
+        .collect();
+    other.reverse();
+    let third = other.len() / 3;
+    other.rotate_left(third);
+    other
+}
+
+/// Renaming every id and shuffling the features leaves every region on the same cell, with the
+/// same square (within 1e-9 cell).
+pub fn assert_ids_and_order_do_not_matter(regions: &[Region], params: &Params) {
+    let run = |regions: &[Region]| generate(regions, params, &|_, _| true).expect("a grid map");
+    let a = run(regions);
+    let shuffled = renamed_and_shuffled(regions);
+    let b = run(&shuffled);
+    let renamed = |id: &str| id.split_once('-').map_or(id, |(_, old)| old).to_owned();
+    let by_old_id: std::collections::HashMap<String, &RegionCell> =
+        b.cells.iter().map(|c| (renamed(&c.id), c)).collect();
+    for cell in &a.cells {
+        let other = by_old_id[&cell.id];
+        assert_eq!(
+            (cell.col, cell.row),
+            (other.col, other.row),
+            "region {}",
+            cell.id
+        );
+        for (p, q) in cell
+            .cell
+            .exterior()
+            .coords()
+            .zip(other.cell.exterior().coords())
+        {
+            let off = (p.x - q.x).abs().max((p.y - q.y).abs()) / a.cell_size;
+            assert!(off < 1e-9, "region {}: corners {p:?} and {q:?}", cell.id);
+        }
+    }
+    assert_eq!(a.metrics, b.metrics);
 }
