@@ -3,8 +3,7 @@
 //! Cholesky replaces the paper's dense inverses), the whole Snake, and the whole method.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use snakegrid::core::candidates::Input;
-use snakegrid::core::{forces, network, snake};
+use snakegrid::diagnostics::SnakeNetwork;
 use snakegrid::io::{read_regions, Job};
 use snakegrid::{generate, Params, Region};
 use std::time::Duration;
@@ -28,15 +27,6 @@ fn load(name: &str) -> Vec<Region> {
     read_regions(&job).expect("shared layer").regions
 }
 
-/// The network the driver builds for `regions` (noise-free run).
-fn network_of(regions: &[Region], params: &Params) -> (network::Network, Vec<Vec<usize>>) {
-    let prepared = Input::of(regions, params).expect("valid regions").prepared;
-    let net =
-        network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency).expect("network");
-    let neighbours = forces::neighbours(&net, &prepared.adjacency);
-    (net, neighbours)
-}
-
 fn snake_step(c: &mut Criterion) {
     let mut group = c.benchmark_group("snake_step");
     group.measurement_time(Duration::from_secs(5));
@@ -46,9 +36,9 @@ fn snake_step(c: &mut Criterion) {
     };
     for name in LAYERS {
         let regions = load(name);
-        let (net, neighbours) = network_of(&regions, &one);
-        group.bench_with_input(BenchmarkId::new(name, net.nodes.len()), &net, |b, net| {
-            b.iter(|| snake::run(net, &neighbours, &one, &|| true).expect("snake"))
+        let net = SnakeNetwork::of(&regions, &one).expect("a network");
+        group.bench_with_input(BenchmarkId::new(name, net.nodes()), &net, |b, net| {
+            b.iter(|| net.run(&one).expect("snake"))
         });
     }
     group.finish();
@@ -67,11 +57,11 @@ fn snake_paper_sizes(c: &mut Criterion) {
             vertices_per_region: per_region,
             ..Params::default()
         };
-        let (net, neighbours) = network_of(&regions, &params);
+        let net = SnakeNetwork::of(&regions, &params).expect("a network");
         group.bench_with_input(
-            BenchmarkId::new("us_states", net.nodes.len()),
+            BenchmarkId::new("us_states", net.nodes()),
             &net,
-            |b, net| b.iter(|| snake::run(net, &neighbours, &params, &|| true).expect("snake")),
+            |b, net| b.iter(|| net.run(&params).expect("snake")),
         );
     }
     group.finish();

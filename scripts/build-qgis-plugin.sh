@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Builds the installable QGIS plugin zip: the release library, then qgis-plugin/snakegrid/ with
-# libsnakegrid.so beside its Python files, zipped as QGIS expects (one top folder, snakegrid/).
+# Builds the installable QGIS plugin zip: the release library without GDAL (the plugin reads and
+# writes through QGIS, so the library links only the C runtime and loads beside any GDAL), then
+# qgis-plugin/snakegrid/ with libsnakegrid.so beside its Python files, zipped as QGIS expects
+# (one top folder, snakegrid/).
 #
 # Usage: scripts/build-qgis-plugin.sh [OUT.zip]     (default target/snakegrid-qgis-plugin.zip)
 # Install it in QGIS with Plugins > Manage and Install Plugins > Install from ZIP.
@@ -11,8 +13,12 @@ out="${1:-$root/target/snakegrid-qgis-plugin.zip}"
 mkdir -p "$(dirname "$out")"
 out="$(realpath "$out")"
 
-cargo build --manifest-path "$root/Cargo.toml" --release --lib
+cargo build --manifest-path "$root/Cargo.toml" --release --lib --no-default-features
 library="$root/target/release/libsnakegrid.so"
+if ldd "$library" | grep -q gdal; then
+    echo "build-qgis-plugin: $library links GDAL" >&2
+    exit 1
+fi
 
 staging="$(mktemp -d)"
 trap 'rm -rf "$staging"' EXIT

@@ -4,6 +4,24 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export DEBIAN_FRONTEND=noninteractive
+
+# Rust comes from rustup: Debian 12's own rustc (1.63) is older than snakegrid needs. Say so
+# before installing anything, rather than failing halfway through the build.
+needed="$(sed -n 's/^rust-version = "\(.*\)"/\1/p' Cargo.toml)"
+export PATH="$HOME/.cargo/bin:$PATH"
+if ! command -v cargo >/dev/null 2>&1; then
+    echo "setup: cargo is missing. Install Rust $needed or newer with rustup:" >&2
+    echo "    curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y" >&2
+    echo "then open a new shell (or run: . \"\$HOME/.cargo/env\") and run scripts/setup.sh again." >&2
+    exit 1
+fi
+have="$(rustc --version | awk '{print $2}')"
+if [ "$(printf '%s\n%s\n' "$needed" "$have" | sort -V | head -n 1)" != "$needed" ]; then
+    echo "setup: rustc $have is older than the $needed snakegrid needs ($(command -v rustc))." >&2
+    echo "    rustup update stable    (or, with Debian's rustc first on PATH: remove it, then install rustup)" >&2
+    exit 1
+fi
+
 apt-get update -qq
 apt-get install -y -qq --no-install-recommends \
     libgdal-dev gdal-bin pkg-config cmake g++ valgrind >/dev/null

@@ -7,7 +7,7 @@ use geo::{MultiPolygon, Polygon};
 use geo_traits::to_geo::{ToGeoMultiPolygon, ToGeoPolygon};
 use geo_traits::GeometryTrait;
 use wkb::reader::Wkb;
-use wkb::writer::{write_polygon, WriteOptions};
+use wkb::writer::{write_multi_polygon, write_polygon, WriteOptions};
 use wkb::Endianness;
 
 /// Reads one region's geometry. Either byte order, ISO or extended (EWKB) flavour; the whole
@@ -47,10 +47,22 @@ pub fn from_polygon(polygon: &Polygon<f64>) -> Vec<u8> {
     out
 }
 
+/// Writes a multipolygon (the moved outline) as little-endian 2D ISO WKB.
+pub fn from_multi_polygon(polygons: &MultiPolygon<f64>) -> Vec<u8> {
+    let mut out = Vec::new();
+    let options = WriteOptions {
+        endianness: Endianness::LittleEndian,
+    };
+    // As for from_polygon.
+    write_multi_polygon(&mut out, polygons, &options)
+        .expect("a 2D multipolygon always writes to a Vec");
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use geo::{polygon, Area};
+    use geo::{polygon, Area, MapCoords};
 
     fn square() -> Polygon<f64> {
         polygon![(x: 0.0, y: 0.0), (x: 2.0, y: 0.0), (x: 2.0, y: 2.0), (x: 0.0, y: 2.0)]
@@ -111,5 +123,14 @@ mod tests {
         longer.push(0);
         let err = to_multi_polygon(&longer).unwrap_err();
         assert!(err.contains("1 bytes after"), "{err}");
+    }
+
+    #[test]
+    fn a_multipolygon_round_trips() {
+        let two = MultiPolygon(vec![
+            square(),
+            square().map_coords(|c| c + (5.0, 0.0).into()),
+        ]);
+        assert_eq!(to_multi_polygon(&from_multi_polygon(&two)).unwrap(), two);
     }
 }

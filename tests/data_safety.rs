@@ -1,6 +1,8 @@
 //! Nothing the user owns is lost: no option makes a run write to a file of the source, however
 //! the paths are spelled, and memory follows the regions rather than the empty space between
 //! them.
+// Reads and writes datasets: needs the GDAL layer.
+#![cfg(feature = "gdal")]
 
 use std::path::{Path, PathBuf};
 

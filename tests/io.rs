@@ -1,5 +1,7 @@
 //! `snakegrid::io::run`, the entry point the command line and the C API share: attribute
 //! fidelity, layers without a CRS, and cancellation (which leaves nothing behind).
+// Reads and writes datasets: needs the GDAL layer.
+#![cfg(feature = "gdal")]
 
 use gdal::vector::{Feature, FieldDefn, Geometry, LayerAccess, LayerOptions, OGRFieldType};
 use gdal::{Dataset, DriverManager};

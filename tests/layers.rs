@@ -1,10 +1,10 @@
 //! The method on the shared real layers: what issue 2 says must hold, asserted on computed
 //! results. Reads through the same GDAL reader as the command line.
+// Reads and writes datasets: needs the GDAL layer.
+#![cfg(feature = "gdal")]
 
-use geo::{Area, BooleanOps, Coord, MultiPolygon};
-use snakegrid::core::candidates::Input;
-use snakegrid::core::geometry::RingIndex;
-use snakegrid::core::{forces, network, snake};
+use geo::{Area, BooleanOps, Contains, MultiPolygon, Point, Validation};
+use snakegrid::diagnostics::SnakeNetwork;
 use snakegrid::io::{read_regions, Job};
 use snakegrid::{generate, score, GridMap, Params, Region, StopReason};
 
@@ -95,34 +95,29 @@ fn the_plain_method_is_the_paper_and_refinement_lifts_it() {
 fn the_outline_stays_simple_and_holds_the_centroids_at_every_step() {
     let regions = load("us_states");
     let params = Params::default();
-    // The same preparation as the driver, then the Snake step by step.
-    let prepared = Input::of(&regions, &params).unwrap().prepared;
-    let net = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency).unwrap();
-    let neighbours = forces::neighbours(&net, &prepared.adjacency);
+    let network = SnakeNetwork::of(&regions, &params).unwrap();
     let mut spreads = Vec::new();
     for steps in 1..=params.max_steps {
-        let run = snake::run(
-            &net,
-            &neighbours,
-            &Params {
+        let moved = network
+            .run(&Params {
                 max_steps: steps,
                 ..params.clone()
-            },
-            &|| true,
-        )
-        .unwrap();
-        assert_eq!(run.report.steps, steps, "no step was refused");
-        let outline = RingIndex::new(&net.ring_coords(&run.positions));
+            })
+            .unwrap();
+        assert_eq!(moved.report.steps, steps, "no step was refused");
         assert!(
-            !outline.self_intersects(),
-            "outline self-intersects after {steps} steps"
+            moved.outline.is_valid(),
+            "the outline is not simple after {steps} steps: {:?}",
+            moved.outline.check_validation()
         );
-        let centroids: &[Coord<f64>] = &run.positions[..net.centroids];
         assert!(
-            centroids.iter().all(|&c| outline.contains(c)),
+            moved
+                .centroids
+                .iter()
+                .all(|&c| moved.outline.contains(&Point(c))),
             "a centroid left the outline after {steps} steps"
         );
-        spreads.push(run.report.spread_after);
+        spreads.push(moved.report.spread_after);
     }
     assert!(spreads.last().unwrap() < &spreads[0]);
 }
@@ -228,4 +223,25 @@ fn scoring_a_layout_again_gives_its_metrics() {
     for (a, b) in per_region.iter().zip(&map.cells) {
         assert!((a.neighbours_kept - b.metrics.neighbours_kept).abs() < 1e-12);
     }
+}
+
+#[test]
+fn the_number_of_threads_does_not_change_the_layout() {
+    let regions = load("nc_counties");
+    let on = |threads| {
+        run(
+            &regions,
+            &Params {
+                threads,
+                ..Params::default()
+            },
+        )
+    };
+    let (one, three) = (on(1), on(3));
+    for (a, b) in one.cells.iter().zip(&three.cells) {
+        assert_eq!((a.id.as_str(), a.col, a.row), (b.id.as_str(), b.col, b.row));
+        assert_eq!(a.cell, b.cell);
+    }
+    assert_eq!(one.metrics, three.metrics);
+    assert_eq!(one.candidates, three.candidates);
 }

@@ -98,6 +98,8 @@ fn cheap(name: &str) -> Option<f64> {
         "max_steps" => Some(30.0),
         "refine_moves" => Some(4000.0),
         "refine_swap_only_below" => Some(40.0),
+        "vertices_per_region" => Some(8.0),
+        "threads" => Some(4.0),
         _ => None,
     }
 }
@@ -260,6 +262,7 @@ proptest! {
 /// The corners of the box of α, β and κ (the parameter table's ranges) lay out us_states and a
 /// 2,000-region Voronoi layer: the ranges are ones over which the stiffness matrix stays
 /// definite.
+#[cfg(feature = "gdal")]
 #[test]
 fn every_corner_of_the_snake_ranges_lays_out_real_and_large_layers() {
     let bundled = concat!(env!("CARGO_MANIFEST_DIR"), "/data/us_states.gpkg");

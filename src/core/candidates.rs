@@ -31,9 +31,27 @@ const MAX_SPAN: f64 = 1e6;
 /// Draws of a noisy centroid before it is left where it was (a draw must land inside the outline).
 const NOISE_DRAWS: usize = 16;
 
-/// See [`crate::generate`].
+/// See [`crate::generate`]. With `params.threads` set, the work runs on a pool of that many
+/// threads; the result is the same for any number, since every parallel step collects in order
+/// and seeds from the candidate's index.
 pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Result<GridMap, Error> {
     params.validate().map_err(Error::InvalidParameter)?;
+    if params.threads == 0 {
+        return generate_here(regions, params, progress);
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(params.threads)
+        .build()
+        .map_err(|e| Error::Internal(format!("cannot start {} threads: {e}", params.threads)))?;
+    pool.install(|| generate_here(regions, params, progress))
+}
+
+/// [`generate`] on the current thread pool.
+fn generate_here(
+    regions: &[Region],
+    params: &Params,
+    progress: Progress,
+) -> Result<GridMap, Error> {
     let Input {
         order,
         frame,

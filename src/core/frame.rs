@@ -25,11 +25,11 @@ impl Frame {
         })
     }
 
-    pub fn to_unit(&self, c: Coord<f64>) -> Coord<f64> {
+    pub fn to_unit(self, c: Coord<f64>) -> Coord<f64> {
         (c - self.origin) / self.scale
     }
 
-    pub fn to_map(&self, c: Coord<f64>) -> Coord<f64> {
+    pub fn to_map(self, c: Coord<f64>) -> Coord<f64> {
         c * self.scale + self.origin
     }
 

@@ -3,6 +3,7 @@
 //! cross another?" in logarithmic time. The Snake asks these of a moving outline every step, so
 //! they work on plain coordinate rings rather than on geo polygons.
 
+use geo::kernels::{Kernel, Orientation, RobustKernel};
 use geo::{Coord, Rect};
 use rstar::{PointDistance, RTree, RTreeObject, AABB};
 
@@ -71,23 +72,26 @@ pub fn nearest_on_segment(p: Coord<f64>, a: Coord<f64>, b: Coord<f64>) -> Coord<
     a + ab * t
 }
 
-fn cross(o: Coord<f64>, a: Coord<f64>, b: Coord<f64>) -> f64 {
-    (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x)
-}
-
-/// Whether the closed segments `p1`–`p2` and `q1`–`q2` share any point (touching counts).
+/// Whether the closed segments `p1`–`p2` and `q1`–`q2` share any point (touching counts). The
+/// orientations come from geo's robust (adaptive exact) predicate: near-collinear segments,
+/// which dense boundaries are full of, get the exact answer instead of rounding noise.
 pub fn segments_intersect(p1: Coord<f64>, p2: Coord<f64>, q1: Coord<f64>, q2: Coord<f64>) -> bool {
-    let d1 = cross(q1, q2, p1);
-    let d2 = cross(q1, q2, p2);
-    let d3 = cross(p1, p2, q1);
-    let d4 = cross(p1, p2, q2);
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
-        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
-    {
+    let side = |a, b, c| RobustKernel::orient2d(a, b, c);
+    let (d1, d2) = (side(q1, q2, p1), side(q1, q2, p2));
+    let (d3, d4) = (side(p1, p2, q1), side(p1, p2, q2));
+    let opposite = |a: Orientation, b: Orientation| {
+        matches!(
+            (a, b),
+            (Orientation::Clockwise, Orientation::CounterClockwise)
+                | (Orientation::CounterClockwise, Orientation::Clockwise)
+        )
+    };
+    if opposite(d1, d2) && opposite(d3, d4) {
         return true;
     }
-    let on = |o: Coord<f64>, a: Coord<f64>, p: Coord<f64>, d: f64| {
-        d == 0.0
+    // A collinear end lies on the other segment when it is within its bounding box (exact).
+    let on = |o: Coord<f64>, a: Coord<f64>, p: Coord<f64>, d: Orientation| {
+        d == Orientation::Collinear
             && p.x >= o.x.min(a.x)
             && p.x <= o.x.max(a.x)
             && p.y >= o.y.min(a.y)

@@ -8,20 +8,24 @@
 //!
 //! Everything here is planar and knows nothing of GDAL, the C API or QGIS.
 
-pub mod assign;
-pub mod candidates;
-pub mod forces;
-pub mod frame;
-pub mod geometry;
-pub mod grid;
-pub mod metrics;
-pub mod network;
-pub mod outline;
+#![forbid(unsafe_code)]
+
+mod assign;
+mod candidates;
+pub mod crs;
+pub mod diagnostics;
+mod forces;
+mod frame;
+pub(crate) mod geometry;
+mod grid;
+mod metrics;
+mod network;
+mod outline;
 pub mod params;
-pub mod rank;
-pub mod refine;
-pub mod score;
-pub mod snake;
+mod rank;
+mod refine;
+mod score;
+mod snake;
 
 use geo::{Coord, MultiPolygon, Polygon};
 use serde::Serialize;

@@ -49,6 +49,7 @@ pub struct Params {
     pub refine_cell_ratio: f64,
     pub refine_swap_only_below: usize,
     pub topsis_weights: [f64; 4],
+    pub threads: usize,
 }
 
 impl Default for Params {
@@ -79,6 +80,7 @@ impl Default for Params {
             refine_cell_ratio: 1.3,
             refine_swap_only_below: 20,
             topsis_weights: [1.0; 4],
+            threads: 0,
         }
     }
 }
@@ -91,6 +93,7 @@ pub enum Group {
     Candidates,
     Refinement,
     Ranking,
+    Run,
 }
 
 impl Group {
@@ -101,6 +104,7 @@ impl Group {
             Group::Candidates => "Candidates",
             Group::Refinement => "Refinement",
             Group::Ranking => "Ranking",
+            Group::Run => "Run",
         }
     }
 
@@ -114,6 +118,7 @@ impl Group {
             Group::Candidates => "Candidate layouts (method.md §7)",
             Group::Refinement => "Refinement after the assignment (method.md §6b)",
             Group::Ranking => "Ranking of the candidates (method.md §7)",
+            Group::Run => "Running (no effect on the result)",
         }
     }
 }
@@ -815,6 +820,20 @@ pub static PARAMETERS: &[Parameter] = &[
             },
         ),
     },
+    Parameter {
+        name: "threads",
+        kind: Kind::Integer { bits: 32 },
+        optional: false,
+        min: closed(0.0),
+        max: closed(1024.0),
+        unit: "threads",
+        group: Group::Run,
+        advanced: true,
+        summary: "Worker threads",
+        help: "Threads the candidates are computed on; 0: as many as the machine has (or \
+             RAYON_NUM_THREADS). The result is the same for every value.",
+        access: accessors!(threads, Integer),
+    },
 ];
 
 /// The table row of `name`.
@@ -865,6 +884,7 @@ pub fn markdown() -> String {
         Group::Candidates,
         Group::Refinement,
         Group::Ranking,
+        Group::Run,
     ];
     for group in groups {
         let _ = writeln!(out, "**{}**\n", group.title());

@@ -146,28 +146,34 @@ pub(crate) unsafe fn optional_text<'a>(
     })
 }
 
-/// Reads a byte-buffer argument.
+/// Reads an array argument (bytes, numbers).
 ///
 /// # Safety
-/// `ptr` must be NULL or valid for reading `len` bytes that stay unchanged for `'a`.
-pub(crate) unsafe fn bytes<'a>(
-    ptr: *const u8,
+/// `ptr` must be NULL or valid for reading `len` elements that stay unchanged for `'a`.
+pub(crate) unsafe fn slice<'a, T>(
+    ptr: *const T,
     len: usize,
     argument: &str,
-) -> Result<&'a [u8], Failure> {
+) -> Result<&'a [T], Failure> {
     if ptr.is_null() {
         return Err(Failure::null(argument));
     }
     // No real buffer is this long: a negative length cast to size_t, most likely. Refused here
     // because a slice that long would itself be undefined behaviour.
-    if len > isize::MAX as usize {
+    if len > isize::MAX as usize / std::mem::size_of::<T>().max(1) {
         return Err(Failure::new(
             Status::INVALID_ARGUMENT,
             format!("argument {argument}: length {len} is not a buffer length"),
         ));
     }
-    // SAFETY: non-NULL, at most isize::MAX bytes, and by the caller's guarantee `len` readable
-    // bytes that outlive 'a.
+    if !ptr.is_aligned() {
+        return Err(Failure::new(
+            Status::INVALID_ARGUMENT,
+            format!("argument {argument} is not aligned for its element type"),
+        ));
+    }
+    // SAFETY: non-NULL, aligned, at most isize::MAX bytes, and by the caller's guarantee `len`
+    // readable elements that outlive 'a.
     Ok(unsafe { std::slice::from_raw_parts(ptr, len) })
 }
 

@@ -1,9 +1,9 @@
-//! A dataset-to-dataset run, described as the command line describes it ([`crate::io::Job`]), so that the
+//! A dataset-to-dataset run, described as the command line describes it ([`crate::job::Job`]), so that the
 //! C API reads and writes through GDAL exactly as `snakegrid DST SRC [SRC_LAYER]` does.
 
 use super::handle::{self, Handle, Out};
 use super::status::{guard, guard_free, Failure, Status};
-use crate::io::Job;
+use crate::job::Job;
 use std::ffi::c_char;
 
 /// Where to read regions and where to write the grid map. Made by snakegrid_job_new(),
@@ -27,6 +27,7 @@ const SETTINGS: &str = "src (SRC), src_layer (SRC_LAYER), where (-where), id_fie
 /// Makes an empty job (no source, no destination, no overwrite) and writes it to `*out`.
 ///
 /// Thread safety: safe from any thread.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_job_new(out: *mut *mut DatasetJob) -> Status {
     guard("snakegrid_job_new", || {
@@ -63,6 +64,7 @@ pub unsafe extern "C" fn snakegrid_job_free(job: *mut DatasetJob) {
 ///
 /// Fails with SNAKEGRID_INVALID_ARGUMENT for another name. Thread safety: not concurrently with
 /// any other use of the same handle.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_job_set(
     job: *mut DatasetJob,
@@ -113,6 +115,7 @@ fn optional_setting<'a>(job: &'a mut Job, name: &str) -> Result<&'a mut Option<S
 /// replaced only once the run has succeeded. Off when the job is made.
 ///
 /// Thread safety: not concurrently with any other use of the same handle.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_job_set_overwrite(
     job: *mut DatasetJob,

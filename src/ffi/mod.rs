@@ -12,7 +12,8 @@
 //! - [`job`]: a dataset-to-dataset run, as the command line describes it;
 //! - [`run`]: the two entry points and the progress callback;
 //! - [`result`]: reading a finished run;
-//! - [`score`]: scoring a layout made elsewhere.
+//! - [`score`]: scoring a layout made elsewhere;
+//! - [`crs`]: the working-CRS rule, for hosts that project layers themselves.
 //!
 //! The safety contract of every `unsafe extern "C"` function is the one the header states once
 //! for all (pointers are NULL or valid for the access described, handles come from this
@@ -38,6 +39,8 @@ pub mod run;
 pub mod result;
 
 pub mod score;
+
+pub mod crs;
 
 use std::ffi::{c_char, CStr};
 
@@ -72,6 +75,7 @@ mod tests {
             include_str!("run.rs"),
             include_str!("result.rs"),
             include_str!("score.rs"),
+            include_str!("crs.rs"),
         ];
         // Built from parts so that this test's own text is not taken for an export.
         let marker = concat!("#[no_", "mangle]");
@@ -88,6 +92,6 @@ mod tests {
             }
         }
         // handle.rs exports nothing; the count catches a module left out of the list above.
-        assert_eq!(exports, 35);
+        assert_eq!(exports, 40);
     }
 }

@@ -23,6 +23,7 @@ impl Handle for Options {
 /// Makes an options handle with every parameter at its default and writes it to `*out`.
 ///
 /// Thread safety: safe from any thread.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_options_new(out: *mut *mut Options) -> Status {
     guard("snakegrid_options_new", || {
@@ -52,6 +53,7 @@ pub unsafe extern "C" fn snakegrid_options_free(options: *mut Options) {
 /// out of range; the handle is then unchanged.
 ///
 /// Thread safety: not concurrently with any other use of the same handle.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_options_set(
     options: *mut Options,
@@ -70,6 +72,7 @@ pub unsafe extern "C" fn snakegrid_options_set(
 /// integer parameter refuses a fractional value.
 ///
 /// Thread safety: not concurrently with any other use of the same handle.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_options_set_double(
     options: *mut Options,
@@ -86,6 +89,7 @@ pub unsafe extern "C" fn snakegrid_options_set_double(
 /// Sets an integer (or numeric) parameter. As snakegrid_options_set().
 ///
 /// Thread safety: not concurrently with any other use of the same handle.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_options_set_int(
     options: *mut Options,
@@ -101,6 +105,7 @@ pub unsafe extern "C" fn snakegrid_options_set_int(
 /// Sets a boolean parameter. As snakegrid_options_set().
 ///
 /// Thread safety: not concurrently with any other use of the same handle.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_options_set_bool(
     options: *mut Options,
@@ -237,6 +242,7 @@ pub extern "C" fn snakegrid_option_count() -> usize {
 /// Fails with SNAKEGRID_INVALID_ARGUMENT for an index out of range.
 ///
 /// Thread safety: safe from any thread.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_option_info(index: usize, out: *mut COptionInfo) -> Status {
     guard("snakegrid_option_info", || {

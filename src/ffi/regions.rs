@@ -20,6 +20,7 @@ impl Handle for Regions {
 /// Makes an empty regions handle and writes it to `*out`.
 ///
 /// Thread safety: safe from any thread.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_regions_new(out: *mut *mut Regions) -> Status {
     guard("snakegrid_regions_new", || {
@@ -49,6 +50,7 @@ pub unsafe extern "C" fn snakegrid_regions_free(regions: *mut Regions) {
 /// type; the handle is then unchanged. The regions as a whole (unique ids, geometries with
 /// area) are checked by snakegrid_run(). Thread safety: not concurrently with any other use of
 /// the same handle.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_regions_add(
     regions: *mut Regions,
@@ -62,7 +64,7 @@ pub unsafe extern "C" fn snakegrid_regions_add(
         // SAFETY: NUL-terminated string or NULL (header contract).
         let id = unsafe { handle::text(id, "id") }?;
         // SAFETY: NULL or `wkb_len` readable bytes (header contract).
-        let wkb = unsafe { handle::bytes(wkb, wkb_len, "wkb") }?;
+        let wkb = unsafe { handle::slice(wkb, wkb_len, "wkb") }?;
         let geometry = crate::wkb::to_multi_polygon(wkb)
             .map_err(|message| Failure::from(Error::input(Some(id), message)))?;
         list.push(Region {

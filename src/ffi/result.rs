@@ -7,7 +7,6 @@ use super::status::{c_string, guard, guard_free, Failure, Status};
 use crate::core::{
     CandidateReport, GridMap, LayoutMetrics, RegionMetrics, SnakeReport, StopReason,
 };
-use geo::MultiPolygon;
 use std::ffi::{c_char, CString};
 
 /// The outcome of a successful run. Made by snakegrid_run() or snakegrid_run_job(), freed by
@@ -35,24 +34,11 @@ impl Output {
                 .iter()
                 .map(|c| crate::wkb::from_polygon(&c.cell))
                 .collect(),
-            moved_outline_wkb: multi_polygon_wkb(&map.moved_outline),
+            moved_outline_wkb: crate::wkb::from_multi_polygon(&map.moved_outline),
             notes: notes.iter().map(|n| c_string(n)).collect(),
             map,
         }
     }
-}
-
-/// A multipolygon as little-endian 2D ISO WKB: the MultiPolygon header, then each part as the
-/// Polygon WKB that [`crate::wkb::from_polygon`] writes (that is the format's definition).
-fn multi_polygon_wkb(outline: &MultiPolygon<f64>) -> Vec<u8> {
-    let mut out = vec![1u8];
-    out.extend(6u32.to_le_bytes());
-    // WKB counts are 32-bit; a map's outline has a handful of parts, never 2^32.
-    out.extend((outline.0.len() as u32).to_le_bytes());
-    for polygon in &outline.0 {
-        out.extend(crate::wkb::from_polygon(polygon));
-    }
-    out
 }
 
 impl Handle for RunResult {
@@ -264,6 +250,7 @@ fn at<'a, T>(items: &'a [T], index: usize, what: &str) -> Result<&'a T, Failure>
 /// they were given (added to the regions handle, or read from the source layer).
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_count(
     result: *const RunResult,
@@ -280,6 +267,7 @@ pub unsafe extern "C" fn snakegrid_result_count(
 /// The side of a cell, in map units.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_cell_size(
     result: *const RunResult,
@@ -296,6 +284,7 @@ pub unsafe extern "C" fn snakegrid_result_cell_size(
 /// The id of region `index`, as given. The string belongs to the result.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_region_id(
     result: *const RunResult,
@@ -314,6 +303,7 @@ pub unsafe extern "C" fn snakegrid_result_region_id(
 /// leftmost and topmost used cells.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_cell(
     result: *const RunResult,
@@ -337,6 +327,7 @@ pub unsafe extern "C" fn snakegrid_result_cell(
 /// `*wkb` points to `*wkb_len` bytes that belong to the result.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_cell_wkb(
     result: *const RunResult,
@@ -361,6 +352,7 @@ pub unsafe extern "C" fn snakegrid_result_cell_wkb(
 /// `*wkb_len` bytes that belong to the result.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_moved_outline_wkb(
     result: *const RunResult,
@@ -381,6 +373,7 @@ pub unsafe extern "C" fn snakegrid_result_moved_outline_wkb(
 /// How well region `index` is placed.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_region_metrics(
     result: *const RunResult,
@@ -398,6 +391,7 @@ pub unsafe extern "C" fn snakegrid_result_region_metrics(
 /// The metrics of the chosen layout.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_layout_metrics(
     result: *const RunResult,
@@ -414,6 +408,7 @@ pub unsafe extern "C" fn snakegrid_result_layout_metrics(
 /// What the Snake did in the chosen layout's run.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_snake_report(
     result: *const RunResult,
@@ -430,6 +425,7 @@ pub unsafe extern "C" fn snakegrid_result_snake_report(
 /// The number of candidate layouts that were ranked (at least 1).
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_candidate_count(
     result: *const RunResult,
@@ -446,6 +442,7 @@ pub unsafe extern "C" fn snakegrid_result_candidate_count(
 /// Candidate `index`, best first: candidate 0 is the chosen layout.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_candidate(
     result: *const RunResult,
@@ -460,10 +457,12 @@ pub unsafe extern "C" fn snakegrid_result_candidate(
     }
 }
 
-/// The number of notes the run left for the user (e.g. that a geographic source was
-/// projected); 0 for snakegrid_run().
+/// The number of notes the run left for the user: the input's (e.g. that an invalid polygon was
+/// repaired, from either entry point) and, for snakegrid_run_job(), the dataset's (e.g. that a
+/// geographic source was projected).
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_note_count(
     result: *const RunResult,
@@ -480,6 +479,7 @@ pub unsafe extern "C" fn snakegrid_result_note_count(
 /// Note `index`, a sentence. The string belongs to the result.
 ///
 /// Thread safety: any number of threads may read one result at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_note(
     result: *const RunResult,

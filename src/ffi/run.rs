@@ -6,7 +6,7 @@ use super::job::DatasetJob;
 use super::options::Options;
 use super::regions::Regions;
 use super::result::{Output, RunResult};
-use super::status::{c_string, guard, Status};
+use super::status::{c_string, guard, Failure, Status};
 use crate::core::Progress;
 use std::ffi::{c_char, c_int, c_void};
 use std::sync::{Mutex, PoisonError};
@@ -87,6 +87,7 @@ fn with_progress<R>(
 /// area; the message names the region), SNAKEGRID_INVALID_OPTION, SNAKEGRID_CANCELLED, or SNAKEGRID_INTERNAL_ERROR. Thread safety: the
 /// regions and options are only read, so several runs may share them, from any threads, as
 /// long as no thread modifies or frees them meanwhile.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_run(
     regions: *const Regions,
@@ -118,10 +119,12 @@ pub unsafe extern "C" fn snakegrid_run(
 /// command line does, and writes a new result handle to `*result`. `progress` and `user_data`
 /// may be NULL. On failure nothing is left at the destination.
 ///
-/// Fails with SNAKEGRID_IO_ERROR (the source cannot be read, the destination cannot be written
+/// Fails with SNAKEGRID_UNSUPPORTED in a build without GDAL; otherwise with SNAKEGRID_IO_ERROR
+/// (the source cannot be read, the destination cannot be written
 /// or exists without overwrite), SNAKEGRID_INVALID_INPUT, SNAKEGRID_CANCELLED or
 /// SNAKEGRID_INTERNAL_ERROR. Thread safety: as snakegrid_run(); two jobs with the same
 /// destination must not run at once.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_run_job(
     job: *const DatasetJob,
@@ -140,11 +143,74 @@ pub unsafe extern "C" fn snakegrid_run_job(
                 Out::new(result, "result")?,
             )
         };
-        let outcome = with_progress(progress, user_data, |p| crate::io::run(job, params, p))?;
-        out.write(handle::into_raw::<RunResult>(Output::new(
-            outcome.map,
-            &outcome.notes,
-        )));
+        let (map, notes) = with_progress(progress, user_data, |p| run_dataset(job, params, p))?;
+        out.write(handle::into_raw::<RunResult>(Output::new(map, &notes)));
         Ok(())
     })
+}
+
+/// The dataset run of the command line, in a build with GDAL.
+#[cfg(feature = "gdal")]
+fn run_dataset(
+    job: &crate::job::Job,
+    params: &crate::Params,
+    progress: crate::Progress,
+) -> Result<(crate::GridMap, Vec<String>), Failure> {
+    let outcome = crate::io::run(job, params, progress)?;
+    Ok((outcome.map, outcome.notes))
+}
+
+/// A build without GDAL reads and writes no datasets; the in-memory entry point still works.
+#[cfg(not(feature = "gdal"))]
+fn run_dataset(
+    _job: &crate::job::Job,
+    _params: &crate::Params,
+    _progress: crate::Progress,
+) -> Result<(crate::GridMap, Vec<String>), Failure> {
+    Err(Failure::new(
+        Status::UNSUPPORTED,
+        "this build of libsnakegrid has no GDAL, so it reads and writes no datasets: read the \
+         regions yourself and pass them to snakegrid_run(), or use a build with GDAL (the \
+         default cargo build, the command line)",
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ffi::job::{snakegrid_job_free, snakegrid_job_new, snakegrid_job_set};
+    use crate::ffi::options::{snakegrid_options_free, snakegrid_options_new};
+    use crate::ffi::status::snakegrid_last_error_message;
+    use std::ffi::CStr;
+    use std::ptr::null_mut;
+
+    /// The dataset entry point of this build: it reads the layer (with GDAL) or says which build
+    /// can, and either way it names a missing source or the missing GDAL.
+    #[test]
+    fn the_dataset_entry_point_answers_in_every_build() {
+        let (mut job, mut options, mut result) = (null_mut(), null_mut(), null_mut());
+        // SAFETY: fresh out-pointers, strings NUL-terminated, handles freed at the end.
+        unsafe {
+            assert_eq!(snakegrid_job_new(&mut job), Status::OK);
+            assert_eq!(snakegrid_options_new(&mut options), Status::OK);
+            for (key, value) in [(c"src", c"/no/such/source.gpkg"), (c"dst", c"/tmp/x.gpkg")] {
+                assert_eq!(
+                    snakegrid_job_set(job, key.as_ptr(), value.as_ptr()),
+                    Status::OK
+                );
+            }
+            let status = snakegrid_run_job(job, options, None, null_mut(), &mut result);
+            let message = CStr::from_ptr(snakegrid_last_error_message()).to_string_lossy();
+            if cfg!(feature = "gdal") {
+                assert_eq!(status, Status::IO_ERROR, "{message}");
+                assert!(message.contains("no such file"), "{message}");
+            } else {
+                assert_eq!(status, Status::UNSUPPORTED, "{message}");
+                assert!(message.contains("has no GDAL"), "{message}");
+            }
+            assert!(result.is_null());
+            snakegrid_job_free(job);
+            snakegrid_options_free(options);
+        }
+    }
 }

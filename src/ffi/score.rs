@@ -56,6 +56,7 @@ fn cells_by_id(regions: &[Region], cells: &[Region]) -> Result<Vec<Polygon<f64>>
 /// regions snakegrid_run() would refuse; SNAKEGRID_INVALID_ARGUMENT for a `region_metrics_len`
 /// that is not the number of regions. Thread safety: both handles are only read, so they may be
 /// shared by several calls from any threads while no thread modifies or frees them.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_score(
     regions: *const Regions,

@@ -37,6 +37,10 @@ pub enum Status {
     CANCELLED = 7,
     /// A bug in snakegrid (including a caught panic). Please report it with the message.
     INTERNAL_ERROR = 8,
+    /// This build of the library cannot do it: snakegrid_run_job() in a build without GDAL
+    /// (such as the one the QGIS plugin and the Python package ship). The message says which
+    /// build can.
+    UNSUPPORTED = 9,
 }
 
 impl Status {
@@ -51,6 +55,7 @@ impl Status {
             Status::IO_ERROR => c"dataset input/output error",
             Status::CANCELLED => c"cancelled by the progress callback",
             Status::INTERNAL_ERROR => c"internal error",
+            Status::UNSUPPORTED => c"not supported by this build of the library",
         }
     }
 
@@ -65,6 +70,7 @@ impl Status {
             Status::IO_ERROR,
             Status::CANCELLED,
             Status::INTERNAL_ERROR,
+            Status::UNSUPPORTED,
         ]
         .into_iter()
         .find(|s| *s as u32 == code)
@@ -256,14 +262,14 @@ mod tests {
 
     #[test]
     fn every_status_has_a_description_and_unknown_codes_are_safe() {
-        for code in 0..=8 {
+        for code in 0..=9 {
             let status = Status::from_code(code).unwrap();
             assert_eq!(status as u32, code);
             // SAFETY: static NUL-terminated strings.
             let text = unsafe { CStr::from_ptr(snakegrid_status_string(code)) };
             assert_ne!(text, c"unknown status");
         }
-        assert_eq!(Status::from_code(9), None);
+        assert_eq!(Status::from_code(10), None);
         // SAFETY: as above.
         assert_eq!(
             unsafe { CStr::from_ptr(snakegrid_status_string(u32::MAX)) },

@@ -1,8 +1,9 @@
-//! The working CRS: the method is planar, so a geographic layer is projected to a Lambert
-//! azimuthal equal-area CRS centred on it (or to `-t_srs`), and the run says so.
+//! The working CRS: the method is planar, so a geographic layer is projected to the equal-area
+//! CRS that [`crate::crs::working_crs`] chooses for it (or to `-t_srs`), and the run says so.
 
 use super::session::Session;
 use crate::core::Error;
+use crate::crs::LonLatBox;
 use gdal::spatial_ref::{AxisMappingStrategy, CoordTransform, SpatialRef};
 
 /// Where the regions are laid out and how to get there from the source.
@@ -16,16 +17,13 @@ pub(crate) struct Plan {
     pub note: Option<String>,
 }
 
-/// Lon/lat bounds of a geographic layer: (min lon, min lat, max lon, max lat).
-pub(crate) type Bounds = (f64, f64, f64, f64);
-
-/// Decides the working CRS. `bounds` is asked for only when the source is geographic and no
-/// target was given, to centre the automatic projection.
+/// Decides the working CRS: `-t_srs`, else the source's when it is projected, else the rule of
+/// [`crate::crs::working_crs`] for the regions' lon/lat extents `boxes` (asked for only then).
 pub(crate) fn plan(
     session: &Session,
     source: Option<&SpatialRef>,
     target: Option<&str>,
-    bounds: impl FnOnce() -> Option<Bounds>,
+    boxes: impl FnOnce() -> Vec<LonLatBox>,
 ) -> Result<Plan, Error> {
     // GeoPackage stores "no CRS" as one of two placeholder CRSs, which GDAL reads back as real
     // ones ("Undefined geographic SRS" would otherwise send planar data to a projection).
@@ -66,35 +64,20 @@ pub(crate) fn plan(
             })
         }
         (Some(source), None) if source.is_geographic() => {
-            let (min_lon, min_lat, max_lon, max_lat) = bounds().ok_or_else(|| {
-                Error::input(
+            let chosen = crate::crs::working_crs(&boxes()).map_err(|e| match e {
+                Error::InvalidInput { message, .. } => Error::input(
                     None,
-                    "the layer has no coordinates to centre a projection on",
-                )
+                    format!("{message} (the source CRS is {})", describe(source)),
+                ),
+                other => other,
             })?;
-            if min_lat < -90.0 || max_lat > 90.0 || min_lon < -540.0 || max_lon > 540.0 {
-                return Err(Error::input(
-                    None,
-                    format!(
-                        "the source CRS {} is geographic, but the coordinates are not longitudes \
-                         and latitudes (x {min_lon} to {max_lon}, y {min_lat} to {max_lat}): the \
-                         layer's CRS is wrong",
-                        describe(source)
-                    ),
-                ));
-            }
-            let (lon, lat) = ((min_lon + max_lon) / 2.0, (min_lat + max_lat) / 2.0);
-            // Six decimals (about 0.1 m) keep the definition short and stable.
-            let definition = format!(
-                "+proj=laea +lat_0={lat:.6} +lon_0={lon:.6} +datum=WGS84 +units=m +no_defs"
-            );
-            let working = parse(session, &definition)?;
+            let working = parse(session, &chosen.wkt)?;
             Ok(Plan {
                 transform: Some(transform(session, source, &working)?),
                 note: Some(format!(
-                    "the source CRS {} is geographic: projected to Lambert azimuthal equal-area \
-                     centred on the layer ({definition})",
-                    describe(source)
+                    "the source CRS {} is geographic: {}",
+                    describe(source),
+                    chosen.note
                 )),
                 working: Some(working),
             })

@@ -1,9 +1,9 @@
 //! Reading the regions of one layer: open any OGR source, pick the layer, apply `-where`, and
 //! turn each feature into a [`Region`], refusing (and naming) what the method cannot use.
 
-use super::crs::Bounds;
 use super::session::Session;
 use crate::core::{Error, Region};
+use crate::crs::LonLatBox;
 use gdal::spatial_ref::CoordTransform;
 use gdal::vector::{Feature, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
 use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
@@ -207,48 +207,20 @@ fn polygonal(geometry: Option<&Geometry>) -> Result<Geometry, String> {
     }
 }
 
-/// The bounds of all checked geometries of a geographic layer: latitudes as they are, and
-/// longitudes from the west end to the east end of the layer, which for a layer across the
-/// antimeridian (Fiji, Chukotka and Alaska) runs past 180° (see [`longitude_range`]).
-pub(crate) fn bounds(checked: &[Checked]) -> Option<Bounds> {
-    let envelopes: Vec<_> = checked
+/// The lon/lat extent of every checked geometry of a geographic layer, for the working CRS.
+pub(crate) fn boxes(checked: &[Checked]) -> Vec<LonLatBox> {
+    checked
         .iter()
-        .map(|c| c.geometry.envelope())
-        .filter(|e| {
-            [e.MinX, e.MinY, e.MaxX, e.MaxY]
-                .iter()
-                .all(|v| v.is_finite())
+        .map(|c| {
+            let e = c.geometry.envelope();
+            LonLatBox {
+                west: e.MinX,
+                south: e.MinY,
+                east: e.MaxX,
+                north: e.MaxY,
+            }
         })
-        .collect();
-    let (west, east) = longitude_range(envelopes.iter().map(|e| (e.MinX, e.MaxX)).collect())?;
-    let south = envelopes.iter().map(|e| e.MinY).reduce(f64::min)?;
-    let north = envelopes.iter().map(|e| e.MaxY).reduce(f64::max)?;
-    Some((west, south, east, north))
-}
-
-/// The stretch of longitudes the features' ranges `spans` cover: the circle minus the widest gap
-/// between them, so that the projection is centred on the layer and not on the far side of the
-/// Earth when the layer crosses ±180°. Ranges outside -180..180 (a wrong CRS, which the caller
-/// refuses) are taken as they are.
-fn longitude_range(mut spans: Vec<(f64, f64)>) -> Option<(f64, f64)> {
-    let west = spans.iter().map(|s| s.0).reduce(f64::min)?;
-    let east = spans.iter().map(|s| s.1).reduce(f64::max)?;
-    if west < -180.0 || east > 180.0 {
-        return Some((west, east));
-    }
-    spans.sort_by(|a, b| a.0.total_cmp(&b.0));
-    // The gap across ±180° gives the plain range; a wider one between two features moves the
-    // layer's west end to the feature after it.
-    let (mut widest, mut range) = (west + 360.0 - east, (west, east));
-    let mut reach = spans[0].1;
-    for &(start, end) in &spans[1..] {
-        if start - reach > widest {
-            widest = start - reach;
-            range = (start, reach + 360.0);
-        }
-        reach = reach.max(end);
-    }
-    Some(range)
+        .collect()
 }
 
 /// The regions in the working CRS, in the order of `checked`.
@@ -298,36 +270,4 @@ pub(crate) fn regions(
             })
         })
         .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::longitude_range;
-
-    #[test]
-    fn a_layer_across_the_antimeridian_runs_past_180() {
-        let fiji = vec![
-            (177.0, 178.5),
-            (178.5, 180.0),
-            (-180.0, -178.0),
-            (-179.0, -178.5),
-        ];
-        assert_eq!(longitude_range(fiji), Some((177.0, 182.0)));
-    }
-
-    #[test]
-    fn other_layers_keep_their_plain_range() {
-        assert_eq!(
-            longitude_range(vec![(5.0, 10.0), (-3.0, 4.0)]),
-            Some((-3.0, 10.0))
-        );
-        // A feature that spans the world leaves no gap to move the ends to.
-        let world = vec![(-180.0, 180.0), (170.0, 175.0)];
-        assert_eq!(longitude_range(world), Some((-180.0, 180.0)));
-        assert_eq!(
-            longitude_range(vec![(1e7, 1e7 + 5.0)]),
-            Some((1e7, 1e7 + 5.0))
-        );
-        assert_eq!(longitude_range(Vec::new()), None);
-    }
 }

@@ -110,7 +110,7 @@ static void test_status_strings(void) {
         const char *text = snakegrid_status_string(s);
         CHECK(text != NULL && strlen(text) > 0 && strcmp(text, "unknown status") != 0);
     }
-    CHECK(strcmp(snakegrid_status_string(SNAKEGRID_INTERNAL_ERROR + 1), "unknown status") == 0);
+    CHECK(strcmp(snakegrid_status_string(SNAKEGRID_UNSUPPORTED + 1), "unknown status") == 0);
     CHECK(strcmp(snakegrid_status_string(UINT32_MAX), "unknown status") == 0);
 }
 
@@ -292,6 +292,38 @@ static void test_option_table(void) {
     /* A whole-number double is fine for an integer option (hosts often hold numbers as doubles). */
     CHECK_OK(snakegrid_options_set_double(options, "max_steps", 12.0));
     snakegrid_options_free(options);
+}
+
+/* The working-CRS rule: a country gets Lambert azimuthal equal-area at its centre, the world
+ * Equal Earth, and numbers that are not degrees are refused. */
+static void test_working_crs(void) {
+    const double country[4] = {-125.0, 24.0, -66.0, 50.0};
+    const double world[8] = {-180.0, -90.0, 0.0, 83.0, 0.0, -50.0, 180.0, 80.0};
+    const double metres[4] = {0.0, 0.0, 10003.0, 3.0};
+    snakegrid_crs *crs = NULL;
+    const char *text = NULL;
+    CHECK_OK(snakegrid_working_crs(country, 1, &crs));
+    CHECK_OK(snakegrid_crs_name(crs, &text));
+    CHECK(strcmp(text, "Lambert azimuthal equal-area at 37.0\xc2\xb0N 95.5\xc2\xb0W (snakegrid)") == 0);
+    CHECK_OK(snakegrid_crs_wkt(crs, &text));
+    CHECK(strncmp(text, "PROJCRS[", 8) == 0 && strstr(text, "Lambert Azimuthal Equal Area") != NULL);
+    CHECK_OK(snakegrid_crs_note(crs, &text));
+    CHECK(strstr(text, "centred on the layer") != NULL);
+    snakegrid_crs_free(crs);
+    crs = NULL;
+    CHECK_OK(snakegrid_working_crs(world, 2, &crs));
+    CHECK_OK(snakegrid_crs_name(crs, &text));
+    CHECK(strcmp(text, "WGS 84 / Equal Earth Greenwich") == 0);
+    snakegrid_crs_free(crs);
+    crs = NULL;
+    CHECK_FAILS(snakegrid_working_crs(metres, 1, &crs), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("not longitudes and latitudes");
+    CHECK_FAILS(snakegrid_working_crs(country, 0, &crs), SNAKEGRID_INVALID_INPUT);
+    CHECK_FAILS(snakegrid_working_crs(NULL, 1, &crs), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_working_crs(country, 1, NULL), SNAKEGRID_NULL_ARGUMENT);
+    CHECK(crs == NULL);
+    CHECK_FAILS(snakegrid_crs_name(NULL, &text), SNAKEGRID_NULL_ARGUMENT);
+    snakegrid_crs_free(NULL);
 }
 
 /* ---- regions ---- */
@@ -495,12 +527,19 @@ static void test_run(void) {
     CHECK(result != NULL);
     CHECK(log.calls > 0 && log.in_range && log.monotone);
     if (result != NULL) check_result(result);
-    snakegrid_result_free(result);
 
-    /* Without a callback, and with the same options: the same layout. */
+    /* Without a callback, and with the same options: the same layout, cell for cell. */
     snakegrid_result *again = NULL;
     CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &again));
+    CHECK(again != NULL);
+    for (size_t i = 0; result != NULL && again != NULL && i < REGIONS; i++) {
+        int32_t col = -1, row = -1, col_again = -2, row_again = -2;
+        CHECK_OK(snakegrid_result_cell(result, i, &col, &row));
+        CHECK_OK(snakegrid_result_cell(again, i, &col_again, &row_again));
+        CHECK(col == col_again && row == row_again);
+    }
     snakegrid_result_free(again);
+    snakegrid_result_free(result);
     snakegrid_regions_free(regions);
     snakegrid_options_free(options);
 }
@@ -604,11 +643,13 @@ static void *run_in_thread(void *arg) {
     snakegrid_result *result = NULL;
     job->status = snakegrid_run(regions, job->options, NULL, NULL, &result);
     for (size_t i = 0; result != NULL && i < REGIONS; i++) {
-        snakegrid_result_cell(result, i, &job->cells[i][0], &job->cells[i][1]);
+        if (snakegrid_result_cell(result, i, &job->cells[i][0], &job->cells[i][1]) != SNAKEGRID_OK)
+            job->status = SNAKEGRID_INTERNAL_ERROR;
     }
     /* A failure on this thread leaves its own message, whatever the other thread does. */
-    snakegrid_options_set(NULL, "alpha", "1");
-    job->message_is_own = strstr(snakegrid_last_error_message(), "snakegrid_options_set") != NULL;
+    job->message_is_own =
+        snakegrid_options_set(NULL, "alpha", "1") == SNAKEGRID_NULL_ARGUMENT &&
+        strstr(snakegrid_last_error_message(), "snakegrid_options_set") != NULL;
     snakegrid_result_free(result);
     snakegrid_regions_free(regions);
     return NULL;
@@ -640,6 +681,7 @@ int main(void) {
     test_wrong_handles();
     test_options();
     test_option_table();
+    test_working_crs();
     test_bad_regions();
     test_invalid_input_runs();
     test_run();

@@ -56,7 +56,9 @@ static void run_case(const char *corpus, const char *out, char *line, const snak
         if (result != NULL && strcmp(text, "-") != 0) CHECK(has_note(result, text));
     } else {
         if (status == SNAKEGRID_OK) fprintf(stderr, "case %s: expected an error\n", file);
-        CHECK(status == SNAKEGRID_INVALID_INPUT || status == SNAKEGRID_IO_ERROR);
+        snakegrid_status wanted = strcmp(expected, "io_error") == 0 ? SNAKEGRID_IO_ERROR : SNAKEGRID_INVALID_INPUT;
+        CHECK(strcmp(expected, "invalid_input") == 0 || strcmp(expected, "io_error") == 0);
+        CHECK(status == wanted);
         CHECK(result == NULL);
         CHECK_MESSAGE_HAS("snakegrid_run_job");
         CHECK_MESSAGE_HAS(text);

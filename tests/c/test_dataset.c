@@ -70,7 +70,7 @@ static snakegrid_regions *read_regions(const char *src) {
 
 static size_t find_region(const snakegrid_result *result, const char *id) {
     size_t count = 0;
-    snakegrid_result_count(result, &count);
+    CHECK_OK(snakegrid_result_count(result, &count));
     for (size_t i = 0; i < count; i++) {
         const char *other = NULL;
         if (snakegrid_result_region_id(result, i, &other) == SNAKEGRID_OK && strcmp(other, id) == 0) return i;
@@ -175,7 +175,7 @@ int main(int argc, char **argv) {
     CHECK_MESSAGE_HAS("no-such-source");
     CHECK_OK(snakegrid_job_set(job, "src", src));
     CHECK_OK(snakegrid_job_set(job, "id_field", "no_such_field"));
-    CHECK(snakegrid_run_job(job, options, NULL, NULL, &none) != SNAKEGRID_OK);
+    CHECK_FAILS(snakegrid_run_job(job, options, NULL, NULL, &none), SNAKEGRID_INVALID_INPUT);
     CHECK_MESSAGE_HAS("no_such_field");
     CHECK_OK(snakegrid_job_set(job, "id_field", NULL));
     CHECK_FAILS(snakegrid_job_set(job, "colour", "red"), SNAKEGRID_INVALID_ARGUMENT);

@@ -81,7 +81,10 @@ METHOD_PARAMETERS = [
     ("refine_cell_ratio", "Free cells offered", "double", 1.3, True,
      "Cells the refinement may use, as a multiple of the number of regions, >= 1."),
     ("refine_swap_only_below", "Swap only below", "int", 20, True,
-     "Up to this many regions the refinement only swaps cells (keeps the outline)."),
+     "With fewer regions than this the refinement only swaps cells (keeps the outline)."),
+    ("threads", "Worker threads", "int", 0, True,
+     "Threads the candidates are computed on; 0: as many as the machine has. The result is "
+     "the same for every value."),
 ]
 
 INPUT, ID_FIELD, LABEL_FIELD, OUTPUT, OUTLINE = (
