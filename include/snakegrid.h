@@ -413,6 +413,24 @@ typedef struct snakegrid_candidate {
   struct snakegrid_snake_report snake;
 } snakegrid_candidate;
 
+/**
+ * One added field of a grid layer. Its strings are static.
+ */
+typedef struct snakegrid_field {
+  /**
+   * The field's name, at most 10 characters (it fits a Shapefile).
+   */
+  const char *name;
+  /**
+   * A whole number (write an integer field), else a real.
+   */
+  bool integer;
+  /**
+   * What it holds.
+   */
+  const char *description;
+} snakegrid_field;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -553,6 +571,25 @@ snakegrid_status snakegrid_regions_add(struct snakegrid_regions *regions,
                                        const char *id,
                                        const uint8_t *wkb,
                                        size_t wkb_len);
+
+/**
+ * Adds one feature of a layer as the command line reads it, with the same checks and messages:
+ * `feature` names it until its id is known (e.g. "FID 3"), `id` is its id (NULL: a null id),
+ * `wkb` its geometry as `wkb_len` bytes (NULL: a null geometry). A null or empty id, an id
+ * already added by this function, and a geometry that is not a (non-empty) Polygon or
+ * MultiPolygon are refused with SNAKEGRID_INVALID_INPUT and the command line's message, e.g.
+ * "feature FID 3: the id is null" or "feature p1: the geometry is a POINT, not a polygon or
+ * multipolygon"; the handle is then unchanged. Hosts that read layers themselves (QGIS,
+ * Python) use this so that users see what the command line would say.
+ *
+ * Thread safety: not concurrently with any other use of the same handle.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_regions_add_feature(struct snakegrid_regions *regions,
+                                               const char *feature,
+                                               const char *id,
+                                               const uint8_t *wkb,
+                                               size_t wkb_len);
 
 /**
  * Makes an empty job (no source, no destination, no overwrite) and writes it to `*out`.
@@ -854,6 +891,34 @@ snakegrid_status snakegrid_crs_name(const struct snakegrid_crs *crs,
 SNAKEGRID_MUST_USE
 snakegrid_status snakegrid_crs_note(const struct snakegrid_crs *crs,
                                     const char **out);
+
+/**
+ * The number of fields a grid layer adds after the source's.
+ *
+ * Never fails. Thread safety: safe from any thread.
+ */
+size_t snakegrid_field_count(void);
+
+/**
+ * Describes added field `index` (0 to snakegrid_field_count() - 1, in the order a layer has
+ * them) into `*out`. Fails with SNAKEGRID_INVALID_ARGUMENT for an index out of range.
+ *
+ * Thread safety: safe from any thread.
+ */
+SNAKEGRID_MUST_USE snakegrid_status snakegrid_field_info(size_t index, struct snakegrid_field *out);
+
+/**
+ * The value of added field `field` for region `index` of a result, written to `*out` (an
+ * integer field's value is a whole number). Fails with SNAKEGRID_INVALID_ARGUMENT for either
+ * index out of range.
+ *
+ * Thread safety: any number of threads may read one result at once.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_result_field(const struct snakegrid_result *result,
+                                        size_t index,
+                                        size_t field_index,
+                                        double *out);
 
 #ifdef __cplusplus
 }  // extern "C"

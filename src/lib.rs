@@ -23,7 +23,7 @@ pub mod io;
 pub mod job;
 pub mod wkb;
 
-pub use crate::core::{crs, diagnostics, params};
+pub use crate::core::{crs, diagnostics, fields, input, params};
 pub use crate::core::{
     generate, score, CandidateReport, Error, GridMap, LayoutMetrics, LoadModel, Params, Progress,
     Region, RegionCell, RegionMetrics, SnakeReport, StopReason, PARAMETERS,

@@ -3,6 +3,7 @@
 //! decides what a region may be: a Polygon or a MultiPolygon, read in 2D (Z and M are dropped,
 //! as the method is planar).
 
+use crate::input::GeometryKind;
 use geo::{MultiPolygon, Polygon};
 use geo_traits::to_geo::{ToGeoMultiPolygon, ToGeoPolygon};
 use geo_traits::GeometryTrait;
@@ -33,6 +34,45 @@ pub fn to_multi_polygon(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
             geometry.geometry_type()
         )),
     }
+}
+
+/// What kind of geometry `bytes` hold, for the input checks every face shares
+/// ([`crate::input::Admission`]); the names are the OGC ones GDAL prints ("POINT").
+pub fn geometry_kind(bytes: &[u8]) -> Result<GeometryKind<'static>, String> {
+    if let Ok(geometry) = to_multi_polygon(bytes) {
+        let empty = geometry.0.iter().all(|p| p.exterior().0.is_empty());
+        return Ok(if empty {
+            GeometryKind::Empty
+        } else {
+            GeometryKind::Polygonal
+        });
+    }
+    // Not a polygon the reader takes: name the type from the header (byte order, then the type
+    // code, ISO with Z/M in the thousands or EWKB with flags in the high bits), as a reader of
+    // curves or points would.
+    let code = match bytes {
+        [0, a, b, c, d, ..] => u32::from_be_bytes([*a, *b, *c, *d]),
+        [1, a, b, c, d, ..] => u32::from_le_bytes([*a, *b, *c, *d]),
+        _ => return Err(to_multi_polygon(bytes).unwrap_err()),
+    };
+    let name = match (code & 0x0fff_ffff) % 1000 {
+        1 => "POINT",
+        2 => "LINESTRING",
+        4 => "MULTIPOINT",
+        5 => "MULTILINESTRING",
+        7 => "GEOMETRYCOLLECTION",
+        8 => return Ok(GeometryKind::Curved("CIRCULARSTRING")),
+        9 => return Ok(GeometryKind::Curved("COMPOUNDCURVE")),
+        10 => return Ok(GeometryKind::Curved("CURVEPOLYGON")),
+        11 => return Ok(GeometryKind::Curved("MULTICURVE")),
+        12 => return Ok(GeometryKind::Curved("MULTISURFACE")),
+        15 => "POLYHEDRALSURFACE",
+        16 => "TIN",
+        17 => "TRIANGLE",
+        _ => return Err(to_multi_polygon(bytes).unwrap_err()),
+    };
+    // A point or line that does not even parse is still named by its type.
+    Ok(GeometryKind::Other(name))
 }
 
 /// Writes a polygon (a grid cell) as little-endian 2D ISO WKB.
@@ -132,5 +172,30 @@ mod tests {
             square().map_coords(|c| c + (5.0, 0.0).into()),
         ]);
         assert_eq!(to_multi_polygon(&from_multi_polygon(&two)).unwrap(), two);
+    }
+
+    #[test]
+    fn the_kind_of_a_geometry_is_named_as_gdal_names_it() {
+        assert_eq!(
+            geometry_kind(&from_polygon(&square())),
+            Ok(GeometryKind::Polygonal)
+        );
+        let mut point = vec![1u8];
+        point.extend(1u32.to_le_bytes());
+        point.extend(1.0f64.to_le_bytes());
+        point.extend(2.0f64.to_le_bytes());
+        assert_eq!(geometry_kind(&point), Ok(GeometryKind::Other("POINT")));
+        // A big-endian CurvePolygon with Z (ISO 1010) is curved, whatever follows.
+        let mut curved = vec![0u8];
+        curved.extend(1010u32.to_be_bytes());
+        assert_eq!(
+            geometry_kind(&curved),
+            Ok(GeometryKind::Curved("CURVEPOLYGON"))
+        );
+        let mut empty = vec![1u8];
+        empty.extend(3u32.to_le_bytes());
+        empty.extend(0u32.to_le_bytes());
+        assert_eq!(geometry_kind(&empty), Ok(GeometryKind::Empty));
+        assert!(geometry_kind(&[9, 9]).is_err());
     }
 }

@@ -13,7 +13,8 @@
 //! - [`run`]: the two entry points and the progress callback;
 //! - [`result`]: reading a finished run;
 //! - [`score`]: scoring a layout made elsewhere;
-//! - [`crs`]: the working-CRS rule, for hosts that project layers themselves.
+//! - [`crs`]: the working-CRS rule, for hosts that project layers themselves;
+//! - [`fields`]: the fields a grid layer adds, for hosts that write layers themselves.
 //!
 //! The safety contract of every `unsafe extern "C"` function is the one the header states once
 //! for all (pointers are NULL or valid for the access described, handles come from this
@@ -41,6 +42,8 @@ pub mod result;
 pub mod score;
 
 pub mod crs;
+
+pub mod fields;
 
 use std::ffi::{c_char, CStr};
 
@@ -76,6 +79,7 @@ mod tests {
             include_str!("result.rs"),
             include_str!("score.rs"),
             include_str!("crs.rs"),
+            include_str!("fields.rs"),
         ];
         // Built from parts so that this test's own text is not taken for an export.
         let marker = concat!("#[no_", "mangle]");
@@ -92,6 +96,6 @@ mod tests {
             }
         }
         // handle.rs exports nothing; the count catches a module left out of the list above.
-        assert_eq!(exports, 40);
+        assert_eq!(exports, 44);
     }
 }

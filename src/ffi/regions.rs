@@ -3,7 +3,9 @@
 use super::handle::{self, Handle, Out};
 use super::status::{guard, guard_free, Failure, Status};
 use crate::core::{Error, Region};
+use crate::input::{Admission, GeometryKind};
 use std::ffi::c_char;
+use std::ops::Deref;
 
 /// The regions of one map, in a planar CRS (map units, e.g. metres). Made by
 /// snakegrid_regions_new(), filled by snakegrid_regions_add(), freed by snakegrid_regions_free().
@@ -11,8 +13,23 @@ pub struct Regions {
     _opaque: [u8; 0],
 }
 
+/// What a regions handle holds: the regions, and the features admitted so far (for
+/// snakegrid_regions_add_feature's checks).
+#[derive(Default)]
+pub(crate) struct RegionList {
+    regions: Vec<Region>,
+    admission: Admission,
+}
+
+impl Deref for RegionList {
+    type Target = Vec<Region>;
+    fn deref(&self) -> &Vec<Region> {
+        &self.regions
+    }
+}
+
 impl Handle for Regions {
-    type Inner = Vec<Region>;
+    type Inner = RegionList;
     const TAG: u64 = u64::from_be_bytes(*b"sgREGION");
     const NAME: &'static str = "snakegrid_regions";
 }
@@ -26,7 +43,7 @@ pub unsafe extern "C" fn snakegrid_regions_new(out: *mut *mut Regions) -> Status
     guard("snakegrid_regions_new", || {
         // SAFETY: `out` is NULL or writable (header contract).
         let out = unsafe { Out::new(out, "out") }?;
-        out.write(handle::into_raw::<Regions>(Vec::new()));
+        out.write(handle::into_raw::<Regions>(RegionList::default()));
         Ok(())
     })
 }
@@ -67,10 +84,61 @@ pub unsafe extern "C" fn snakegrid_regions_add(
         let wkb = unsafe { handle::slice(wkb, wkb_len, "wkb") }?;
         let geometry = crate::wkb::to_multi_polygon(wkb)
             .map_err(|message| Failure::from(Error::input(Some(id), message)))?;
-        list.push(Region {
+        list.regions.push(Region {
             id: id.to_owned(),
             geometry,
         });
+        Ok(())
+    })
+}
+
+/// Adds one feature of a layer as the command line reads it, with the same checks and messages:
+/// `feature` names it until its id is known (e.g. "FID 3"), `id` is its id (NULL: a null id),
+/// `wkb` its geometry as `wkb_len` bytes (NULL: a null geometry). A null or empty id, an id
+/// already added by this function, and a geometry that is not a (non-empty) Polygon or
+/// MultiPolygon are refused with SNAKEGRID_INVALID_INPUT and the command line's message, e.g.
+/// "feature FID 3: the id is null" or "feature p1: the geometry is a POINT, not a polygon or
+/// multipolygon"; the handle is then unchanged. Hosts that read layers themselves (QGIS,
+/// Python) use this so that users see what the command line would say.
+///
+/// Thread safety: not concurrently with any other use of the same handle.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_regions_add_feature(
+    regions: *mut Regions,
+    feature: *const c_char,
+    id: *const c_char,
+    wkb: *const u8,
+    wkb_len: usize,
+) -> Status {
+    guard("snakegrid_regions_add_feature", || {
+        // SAFETY: a live handle nobody else uses meanwhile (header contract).
+        let list = unsafe { handle::get_mut(regions, "regions") }?;
+        // SAFETY: NUL-terminated strings or NULL (header contract).
+        let (feature, id) = unsafe {
+            (
+                handle::text(feature, "feature")?,
+                handle::optional_text(id, "id")?,
+            )
+        };
+        let wkb = if wkb.is_null() {
+            None
+        } else {
+            // SAFETY: `wkb_len` readable bytes (header contract).
+            Some(unsafe { handle::slice(wkb, wkb_len, "wkb") }?)
+        };
+        let named =
+            |message: String| Failure::from(Error::input(Some(id.unwrap_or(feature)), message));
+        let kind = match wkb {
+            None => GeometryKind::Null,
+            Some(bytes) => crate::wkb::geometry_kind(bytes).map_err(named)?,
+        };
+        // Admitted on a copy, so that a refused feature leaves the handle as it was.
+        let mut admission = list.admission.clone();
+        let id = admission.admit(feature, id, kind)?;
+        let geometry = crate::wkb::to_multi_polygon(wkb.unwrap_or_default()).map_err(named)?;
+        list.admission = admission;
+        list.regions.push(Region { id, geometry });
         Ok(())
     })
 }

@@ -5,7 +5,7 @@
 use super::handle::{self, Handle, Out};
 use super::status::{c_string, guard, guard_free, Failure, Status};
 use crate::core::{
-    CandidateReport, GridMap, LayoutMetrics, RegionMetrics, SnakeReport, StopReason,
+    CandidateReport, GridMap, LayoutMetrics, RegionCell, RegionMetrics, SnakeReport, StopReason,
 };
 use std::ffi::{c_char, CString};
 
@@ -26,6 +26,11 @@ pub(crate) struct Output {
 }
 
 impl Output {
+    /// The cell of region `index`.
+    pub(crate) fn cell(&self, index: usize) -> Result<&RegionCell, Failure> {
+        at(&self.map.cells, index, "regions")
+    }
+
     pub(crate) fn new(map: GridMap, notes: &[String]) -> Output {
         Output {
             ids: map.cells.iter().map(|c| c_string(&c.id)).collect(),
@@ -217,7 +222,7 @@ pub unsafe extern "C" fn snakegrid_result_free(result: *mut RunResult) {
 ///
 /// # Safety
 /// `result` NULL or a live result handle not being freed meanwhile; `out` NULL or writable.
-unsafe fn read<T>(
+pub(crate) unsafe fn read<T>(
     function: &str,
     result: *const RunResult,
     out: *mut T,

@@ -326,6 +326,41 @@ static void test_working_crs(void) {
     snakegrid_crs_free(NULL);
 }
 
+/* The fields a grid layer adds: named, typed, and valued per region as the cell accessors say. */
+static void test_fields(void) {
+    size_t count = snakegrid_field_count();
+    CHECK(count >= 5);
+    snakegrid_field field;
+    CHECK_OK(snakegrid_field_info(0, &field));
+    CHECK(strcmp(field.name, "grid_col") == 0 && field.integer && field.description[0] != '\0');
+    CHECK_OK(snakegrid_field_info(1, &field));
+    CHECK(strcmp(field.name, "grid_row") == 0 && field.integer);
+    CHECK_FAILS(snakegrid_field_info(count, &field), SNAKEGRID_INVALID_ARGUMENT);
+
+    snakegrid_options *options = make_options();
+    snakegrid_regions *regions = make_regions();
+    snakegrid_result *result = NULL;
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
+    for (size_t i = 0; result != NULL && i < REGIONS; i++) {
+        int32_t col = -1, row = -1;
+        double value_col = -2, value_row = -2, displacement = -1;
+        snakegrid_region_metrics metrics;
+        CHECK_OK(snakegrid_result_cell(result, i, &col, &row));
+        CHECK_OK(snakegrid_result_field(result, i, 0, &value_col));
+        CHECK_OK(snakegrid_result_field(result, i, 1, &value_row));
+        CHECK(value_col == col && value_row == row);
+        CHECK_OK(snakegrid_result_region_metrics(result, i, &metrics));
+        CHECK_OK(snakegrid_result_field(result, i, 2, &displacement));
+        CHECK(displacement == metrics.displacement);
+    }
+    double unused = 0;
+    CHECK_FAILS(snakegrid_result_field(result, REGIONS, 0, &unused), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_field(result, 0, count, &unused), SNAKEGRID_INVALID_ARGUMENT);
+    snakegrid_result_free(result);
+    snakegrid_regions_free(regions);
+    snakegrid_options_free(options);
+}
+
 /* ---- regions ---- */
 
 static void test_bad_regions(void) {
@@ -682,6 +717,7 @@ int main(void) {
     test_options();
     test_option_table();
     test_working_crs();
+    test_fields();
     test_bad_regions();
     test_invalid_input_runs();
     test_run();

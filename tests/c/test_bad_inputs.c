@@ -164,6 +164,29 @@ static void test_in_memory_geometry(const snakegrid_options *options) {
     CHECK_FAILS(snakegrid_run(regions, options, NULL, NULL, &result), SNAKEGRID_INVALID_INPUT);
     CHECK_MESSAGE_HAS("no regions");
     CHECK(result == NULL);
+
+    /* A layer's features as a host reads them: the command line's checks and messages. */
+    CHECK_OK(snakegrid_regions_add_feature(regions, "FID 1", "a", square.bytes, square.len));
+    CHECK_FAILS(snakegrid_regions_add_feature(regions, "FID 2", NULL, square.bytes, square.len), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("feature FID 2: the id is null");
+    CHECK_FAILS(snakegrid_regions_add_feature(regions, "FID 3", "", square.bytes, square.len), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("feature FID 3: the id is empty");
+    CHECK_FAILS(snakegrid_regions_add_feature(regions, "FID 4", "a", square.bytes, square.len), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("feature a: the id is not unique (FID 1 and FID 4 share it)");
+    CHECK_FAILS(snakegrid_regions_add_feature(regions, "FID 5", "nothing", NULL, 0), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("feature nothing: the geometry is null");
+    CHECK_FAILS(snakegrid_regions_add_feature(regions, "FID 6", "hollow", empty.bytes, empty.len), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("feature hollow: the geometry is empty");
+    CHECK_FAILS(snakegrid_regions_add_feature(regions, "FID 7", "p1", point.bytes, point.len), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("feature p1: the geometry is a POINT, not a polygon or multipolygon");
+    /* Refused features took nothing: "nothing" may still come, once. */
+    wkb_buffer other = wkb_square(1, 0, 1);
+    CHECK_OK(snakegrid_regions_add_feature(regions, "FID 8", "nothing", other.bytes, other.len));
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
+    size_t admitted = 0;
+    CHECK_OK(snakegrid_result_count(result, &admitted));
+    CHECK(admitted == 2);
+    snakegrid_result_free(result);
     snakegrid_regions_free(regions);
 }
 

@@ -1,0 +1,120 @@
+//! What a layer's features must be to become regions, and what every face says when one is
+//! not: the command line (through GDAL), the C API and the QGIS plugin all admit features here,
+//! so a null id or a line among the polygons gets the same message everywhere.
+
+use super::Error;
+use std::collections::HashMap;
+
+/// What a reader found as a feature's geometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeometryKind<'a> {
+    /// No geometry at all.
+    Null,
+    /// A geometry without points.
+    Empty,
+    /// A polygon or multipolygon: what the method takes.
+    Polygonal,
+    /// A curved geometry (its type name, e.g. "CURVEPOLYGON"), which must be linearised first.
+    Curved(&'a str),
+    /// Any other geometry type (its name, e.g. "POINT").
+    Other(&'a str),
+}
+
+/// The features admitted so far, to refuse a second use of an id.
+#[derive(Clone, Debug, Default)]
+pub struct Admission {
+    /// Each id and the feature that used it first.
+    seen: HashMap<String, String>,
+}
+
+impl Admission {
+    /// Admits one feature, called `feature` in messages until its id is known ("FID 3"), with
+    /// its `id` (`None`: null) and what its geometry is; returns the id. Refuses a null, empty or
+    /// repeated id and a geometry that is not polygonal, naming the feature.
+    pub fn admit(
+        &mut self,
+        feature: &str,
+        id: Option<&str>,
+        geometry: GeometryKind,
+    ) -> Result<String, Error> {
+        let id = id.ok_or_else(|| Error::input(Some(feature), "the id is null"))?;
+        if id.is_empty() {
+            return Err(Error::input(Some(feature), "the id is empty"));
+        }
+        if let Some(first) = self.seen.get(id) {
+            return Err(Error::input(
+                Some(id),
+                format!("the id is not unique ({first} and {feature} share it)"),
+            ));
+        }
+        let problem = match geometry {
+            GeometryKind::Polygonal => None,
+            GeometryKind::Null => Some("the geometry is null".to_owned()),
+            GeometryKind::Empty => Some("the geometry is empty".to_owned()),
+            GeometryKind::Curved(name) => Some(format!(
+                "curved geometries ({name}) are not supported; linearise them first \
+                 (ogr2ogr -nlt CONVERT_TO_LINEAR, or QGIS's Segmentize by maximum angle)"
+            )),
+            GeometryKind::Other(name) => Some(format!(
+                "the geometry is a {name}, not a polygon or multipolygon"
+            )),
+        };
+        if let Some(problem) = problem {
+            return Err(Error::input(Some(id), problem));
+        }
+        self.seen.insert(id.to_owned(), feature.to_owned());
+        Ok(id.to_owned())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_refusal_names_the_feature() {
+        let mut admission = Admission::default();
+        let polygon = GeometryKind::Polygonal;
+        assert_eq!(admission.admit("FID 1", Some("a"), polygon).unwrap(), "a");
+        let refused = [
+            ("FID 2", None, polygon, "feature FID 2: the id is null"),
+            ("FID 3", Some(""), polygon, "feature FID 3: the id is empty"),
+            (
+                "FID 4",
+                Some("a"),
+                polygon,
+                "feature a: the id is not unique (FID 1 and FID 4 share it)",
+            ),
+            (
+                "FID 5",
+                Some("b"),
+                GeometryKind::Null,
+                "feature b: the geometry is null",
+            ),
+            (
+                "FID 6",
+                Some("c"),
+                GeometryKind::Empty,
+                "feature c: the geometry is empty",
+            ),
+            (
+                "FID 7",
+                Some("d"),
+                GeometryKind::Other("POINT"),
+                "feature d: the geometry is a POINT",
+            ),
+            (
+                "FID 8",
+                Some("e"),
+                GeometryKind::Curved("CURVEPOLYGON"),
+                "curved geometries (CURVEPOLYGON)",
+            ),
+        ];
+        for (feature, id, kind, message) in refused {
+            let err = admission.admit(feature, id, kind).unwrap_err().to_string();
+            assert!(err.contains(message), "{err}");
+        }
+        // A refused feature does not take its id.
+        assert_eq!(admission.admit("FID 9", Some("b"), polygon).unwrap(), "b");
+    }
+}
