@@ -241,10 +241,15 @@ fn outputs_must_differ_from_each_other_and_from_the_source() {
     let mut same = job(&src, &src);
     same.overwrite = true;
     let error = run(&same, &Params::default(), &|_, _| true).unwrap_err();
-    assert!(error.to_string().contains("is the source"), "{error}");
+    assert!(
+        error
+            .to_string()
+            .contains("refusing to write over the source"),
+        "{error}"
+    );
     let mut twice = job(&src, &scratch.path("grid.gpkg"));
     twice.json_report = Some(text(&scratch.path("grid.gpkg")));
     let error = run(&twice, &Params::default(), &|_, _| true).unwrap_err();
-    assert!(error.to_string().contains("two outputs"), "{error}");
+    assert!(error.to_string().contains("are the same file"), "{error}");
     assert_eq!(scratch.listing(), ["blocks.gpkg"]);
 }
