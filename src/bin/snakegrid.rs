@@ -34,9 +34,16 @@ struct Cli {
     /// Name of the output layer [default: the source layer's name]
     #[arg(long = "nln", value_name = "NAME", allow_hyphen_values = true)]
     nln: Option<String>,
-    /// Replace DST (and the -json and -svg files) if they exist, once the run has succeeded
+    /// Replace the layer in DST (or DST itself, for a single-layer format) and the -json and -svg
+    /// files if they exist, once the run has succeeded
     #[arg(long = "overwrite")]
     overwrite: bool,
+    /// Add the layer to the existing dataset DST (refused if it has a layer of that name)
+    #[arg(long = "update")]
+    update: bool,
+    /// Source CRS, any definition GDAL accepts, in place of the one the source has
+    #[arg(long = "s_srs", value_name = "CRS", allow_hyphen_values = true)]
+    s_srs: Option<String>,
     /// Only the features matching this OGR SQL attribute filter
     #[arg(long = "where", value_name = "EXPR", allow_hyphen_values = true)]
     where_clause: Option<String>,
@@ -56,6 +63,12 @@ struct Cli {
     /// Short name field for the cells of the -svg picture [default: abbr, else name, else the id]
     #[arg(long = "label", value_name = "FIELD", allow_hyphen_values = true)]
     label: Option<String>,
+    /// Layer creation option of the output driver (repeatable)
+    #[arg(long = "lco", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    lco: Vec<String>,
+    /// Dataset creation option of the output driver (repeatable)
+    #[arg(long = "dsco", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    dsco: Vec<String>,
     /// Quiet: no progress line and no summary
     #[arg(short = 'q', long = "quiet")]
     quiet: bool,
@@ -313,10 +326,14 @@ fn main() -> ExitCode {
         format: cli.format,
         layer_name: cli.nln,
         overwrite: cli.overwrite,
+        update: cli.update,
+        source_srs: cli.s_srs,
         target_srs: cli.t_srs,
         json_report: cli.json,
         svg: cli.svg,
         label_field: cli.label,
+        dataset_options: cli.dsco,
+        layer_options: cli.lco,
     };
     let progress = TermProgress {
         ticks: Mutex::new(-1),
