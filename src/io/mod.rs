@@ -228,7 +228,21 @@ fn run_in(
         progress(READ_SHARE + layout_share * fraction, message)
     })?;
 
-    let metadata = report::metadata(job, &source_layer, params, &map);
+    // Layer metadata set in an existing GeoPackage makes GDAL rewrite the metadata of every
+    // other layer (their timestamps change), so a layer added in place keeps its metrics in its
+    // description only.
+    let metadata = match destination.plan {
+        Plan::New => report::metadata(job, &source_layer, params, &map),
+        Plan::InPlace { .. } => {
+            notes.push(format!(
+                "the run's parameters and metrics are not written to the metadata tables of the \
+                 existing {:?}, which would change the other layers' metadata: the layer's \
+                 description has the metrics, -json the rest",
+                destination.path.display()
+            ));
+            Vec::new()
+        }
+    };
     let final_options = layer_options(&report::description(&map));
     let spec = write::LayerSpec {
         name: &layer_name,
@@ -301,8 +315,10 @@ fn run_in(
     all_notes.extend(map.notes.iter().cloned());
     all_notes.append(&mut notes);
     all_notes.extend(fields.notes);
-    // GDAL's warnings, the probe's among them, once each.
+    // GDAL's warnings, once each, naming the destination rather than its staged copy.
+    let staged_name = staged_path.display().to_string();
     for note in written.notes {
+        let note = note.replace(&staged_name, &job.dst);
         if !all_notes.contains(&note) {
             all_notes.push(note);
         }

@@ -149,6 +149,20 @@ impl Trial<'_> {
         features: &[(&str, &Feature)],
         id_position: Option<usize>,
     ) -> Result<(Vec<String>, bool), Error> {
+        // GDAL's warnings about the trial (unknown options, values cut) come again, about the
+        // real output, when the run writes it.
+        let warnings = self.session.warning_count();
+        let result = self.try_layer_in_memory(fields, features, id_position);
+        self.session.forget_warnings_after(warnings);
+        result
+    }
+
+    fn try_layer_in_memory(
+        &self,
+        fields: &[OutputField],
+        features: &[(&str, &Feature)],
+        id_position: Option<usize>,
+    ) -> Result<(Vec<String>, bool), Error> {
         let folder = MemFolder::new();
         let path = folder.0.join(self.file_name);
         let square: Polygon<f64> =
