@@ -66,10 +66,9 @@ pub(crate) fn read_back(
         }
     }
     let mut count = 0;
+    let mut stored_ids = Vec::new();
     for (k, feature) in layer.features().enumerate() {
         count += 1;
-        let wanted = expected.ids.and_then(|(_, ids)| ids.get(k).copied());
-        let name = wanted.map_or_else(|| format!("number {}", k + 1), str::to_owned);
         let polygon = feature
             .geometry()
             // SAFETY: only reads the wrapped pointer, which `Feature::geometry` has just set;
@@ -81,19 +80,17 @@ pub(crate) fn read_back(
             });
         if !polygon {
             return Err(Error::Io(format!(
-                "the {driver} output {shown:?} does not keep the cells' polygons (the cell of \
-                 feature {name} reads back without one)"
+                "the {driver} output {shown:?} does not keep the cells' polygons (feature \
+                 number {} reads back without one)",
+                k + 1
             )));
         }
-        if let (Some((position, _)), Some(id)) = (expected.ids, wanted) {
-            let stored = feature.field_as_string(found[position]).ok().flatten();
-            if stored.as_deref() != Some(id) {
-                return Err(Error::input(
-                    Some(id),
-                    id_change(driver, id, stored.as_deref()),
-                ));
-            }
+        if let Some((position, _)) = expected.ids {
+            stored_ids.push(feature.field_as_string(found[position]).ok().flatten());
         }
+    }
+    if let Some((_, ids)) = expected.ids {
+        compare_ids(driver, ids, &stored_ids)?;
     }
     if count != expected.features {
         return Err(Error::Io(format!(
@@ -104,10 +101,34 @@ pub(crate) fn read_back(
     Ok(layer.name())
 }
 
+/// Refuses the first id of `ids` that `stored` (the ids read back) does not hold as it is. A
+/// format may store the features in another order (FlatGeobuf sorts them along its spatial
+/// index); what it stored in the place of a missing id is the best guess of what became of it.
+fn compare_ids(driver: &str, ids: &[&str], stored: &[Option<String>]) -> Result<(), Error> {
+    let stored: Vec<Option<&str>> = stored.iter().map(Option::as_deref).collect();
+    if stored.len() == ids.len() && stored.iter().zip(ids).all(|(s, id)| *s == Some(*id)) {
+        return Ok(());
+    }
+    let mut sorted_ids = ids.to_vec();
+    let mut sorted_stored: Vec<&str> = stored.iter().flatten().copied().collect();
+    sorted_ids.sort_unstable();
+    sorted_stored.sort_unstable();
+    if sorted_ids == sorted_stored {
+        return Ok(());
+    }
+    let missing = ids
+        .iter()
+        .position(|id| sorted_stored.binary_search(id).is_err())
+        .unwrap_or(0);
+    let id = ids.get(missing).copied().unwrap_or_default();
+    let instead = stored.get(missing).copied().flatten().filter(|s| *s != id);
+    Err(Error::input(Some(id), id_change(driver, id, instead)))
+}
+
 /// Why an id would not survive the output, from what the driver made of it.
 fn id_change(driver: &str, id: &str, stored: Option<&str>) -> String {
     let Some(stored) = stored else {
-        return format!("the {driver} output would store no id for it");
+        return format!("the {driver} output does not keep this id as it is");
     };
     let how = if stored == id.trim_end() {
         "drops trailing spaces".to_owned()
@@ -128,7 +149,22 @@ fn id_change(driver: &str, id: &str, stored: Option<&str>) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::id_change;
+    use super::{compare_ids, id_change};
+
+    #[test]
+    fn ids_may_come_back_in_another_order_but_not_changed() {
+        let some = |v: &[&str]| v.iter().map(|s| Some(s.to_string())).collect::<Vec<_>>();
+        assert!(compare_ids("FlatGeobuf", &["a", "b", "c"], &some(&["c", "a", "b"])).is_ok());
+        let error = compare_ids("ESRI Shapefile", &["a", "a  "], &some(&["a", "a"])).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "feature a  : the ESRI Shapefile output drops trailing spaces, so the id would be \
+             stored as \"a\", which no longer names this region; choose another -id field or \
+             output format"
+        );
+        let error = compare_ids("GPKG", &["a", "b"], &some(&["a"])).unwrap_err();
+        assert!(error.to_string().starts_with("feature b: "), "{error}");
+    }
 
     #[test]
     fn an_id_change_says_what_the_format_did() {
@@ -138,6 +174,6 @@ mod tests {
         assert!(id_change(dbf, &long, Some(&long[..254]))
             .contains("keeps only the first 254 of its 300 bytes"));
         assert!(id_change(dbf, "北京", Some("??")).contains("cannot encode"));
-        assert!(id_change(dbf, "a", None).contains("no id"));
+        assert!(id_change(dbf, "a", None).contains("does not keep this id"));
     }
 }
