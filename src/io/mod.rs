@@ -39,6 +39,7 @@ use destination::{Destination, Mode, Plan};
 use gdal::spatial_ref::SpatialRef;
 use gdal::vector::LayerAccess;
 use gdal::vector::{Feature, Layer};
+use gdal::Driver;
 use paths::SourceFiles;
 use session::Session;
 use staging::Staging;
@@ -107,7 +108,8 @@ const READ_SHARE: f64 = 0.05;
 const WRITE_SHARE: f64 = 0.08;
 
 /// Reads the source, runs the method, writes the destination (and the report and picture when
-/// asked). On any error nothing is left at the destination.
+/// asked). On any error or cancellation every existing output is left as it was, and nothing
+/// new is left behind.
 pub fn run(job: &Job, params: &Params, progress: Progress) -> Result<Outcome, Error> {
     params.validate().map_err(Error::InvalidParameter)?;
     let session = Session::start();
@@ -228,97 +230,26 @@ fn run_in(
         progress(READ_SHARE + layout_share * fraction, message)
     })?;
 
-    // Layer metadata set in an existing GeoPackage makes GDAL rewrite the metadata of every
-    // other layer (their timestamps change), so a layer added in place keeps its metrics in its
-    // description only.
-    let metadata = match destination.plan {
-        Plan::New => report::metadata(job, &source_layer, params, &map),
-        Plan::InPlace { .. } => {
-            notes.push(format!(
-                "the run's parameters and metrics are not written to the metadata tables of the \
-                 existing {:?}, which would change the other layers' metadata: the layer's \
-                 description has the metrics, -json the rest",
-                destination.path.display()
-            ));
-            Vec::new()
-        }
-    };
-    let final_options = layer_options(&report::description(&map));
-    let spec = write::LayerSpec {
-        name: &layer_name,
-        srs: plan.working.as_ref(),
-        options: &final_options,
-        fields: &fields.fields,
-        metadata: &metadata,
-    };
-    let staged_path = dst_staging.path();
-    let container = match &destination.plan {
-        Plan::New => Container::New {
-            driver: &driver,
-            options: &job.dataset_options,
-        },
-        Plan::InPlace { replace } => {
-            std::fs::copy(&destination.path, &staged_path).map_err(|e| {
-                Error::Io(format!(
-                    "cannot copy the destination {:?} to update it: {e}",
-                    destination.path.display()
-                ))
-            })?;
-            if !job.dataset_options.is_empty() {
-                notes.push(format!(
-                    "-dsco is ignored: the layer is added to the existing {:?}",
-                    destination.path.display()
-                ));
-            }
-            Container::Existing {
-                replace: replace.as_deref(),
-            }
-        }
-    };
-    let rows: Vec<Row> = map
-        .cells
-        .iter()
-        .zip(&features)
-        .map(|(cell, source)| Row {
-            id: &cell.id,
-            source,
-            cell: &cell.cell,
-            computed: write::computed(cell),
-        })
-        .collect();
-    let write_start = 1.0 - WRITE_SHARE;
-    let written = write::write(session, &staged_path, &container, &spec, &rows, &|f| {
-        progress(write_start + WRITE_SHARE * f, "writing")
-    })?;
-    // The last guard: the staged layer holds every cell, field and id as the probe found it.
-    if written.fields != fields.stored {
-        return Err(Error::Io(format!(
-            "the {format} driver named the fields {} when writing, but {} when tried",
-            written.fields.join(", "),
-            fields.stored.join(", ")
-        )));
-    }
-    let layer_written = readback::read_back(
+    let grid = StagedGrid {
         session,
-        &staged_path,
-        &readback::Expected {
-            driver: &format,
-            layer: &written.layer,
-            fields: &fields.stored,
-            ids: id_position.map(|position| (position, ids.as_slice())),
-            features: rows.len(),
-        },
-    )?;
-    drop(rows);
+        job,
+        driver: &driver,
+        destination: &destination,
+        staging: &dst_staging,
+        layer: &layer_name,
+        source_layer: &source_layer,
+        srs: plan.working.as_ref(),
+        fields: &fields,
+        layer_options: &layer_options,
+        ids: id_position.map(|position| (position, ids.as_slice())),
+    };
+    let (layer_written, grid_notes) = grid.write(params, &map, &features, progress)?;
 
     let mut all_notes: Vec<String> = source_notes;
     all_notes.extend(map.notes.iter().cloned());
     all_notes.append(&mut notes);
     all_notes.extend(fields.notes);
-    // GDAL's warnings, once each, naming the destination rather than its staged copy.
-    let staged_name = staged_path.display().to_string();
-    for note in written.notes {
-        let note = note.replace(&staged_name, &job.dst);
+    for note in grid_notes {
         if !all_notes.contains(&note) {
             all_notes.push(note);
         }
@@ -372,6 +303,131 @@ fn run_in(
     // Too late to cancel: the outputs are in place.
     progress(1.0, "done");
     Ok(outcome)
+}
+
+/// The grid layer of a run as it is written in the destination's staging folder.
+struct StagedGrid<'a> {
+    session: &'a Session,
+    job: &'a Job,
+    driver: &'a Driver,
+    destination: &'a Destination,
+    staging: &'a Staging,
+    layer: &'a str,
+    source_layer: &'a str,
+    srs: Option<&'a SpatialRef>,
+    /// The fields as the probe found the driver names them.
+    fields: &'a probe::Fields,
+    /// The layer creation options, given the layer's description.
+    layer_options: &'a dyn Fn(&str) -> Vec<String>,
+    /// The id field's position among the fields, and every region's id in input order.
+    ids: Option<(usize, &'a [&'a str])>,
+}
+
+impl StagedGrid<'_> {
+    /// Writes `map`'s cells with the attributes of `features` (in the same order) into the
+    /// staging folder, as a new dataset or into a copy of the existing one, and reads it back as
+    /// a last guard. Returns the layer's name as written and what the user should know.
+    fn write(
+        &self,
+        params: &Params,
+        map: &GridMap,
+        features: &[Feature],
+        progress: Progress,
+    ) -> Result<(String, Vec<String>), Error> {
+        let (session, job, destination) = (self.session, self.job, self.destination);
+        let format = self.driver.short_name();
+        let mut notes = Vec::new();
+        // Layer metadata set in an existing GeoPackage makes GDAL rewrite the metadata of
+        // every other layer (their timestamps change), so a layer added in place keeps its
+        // metrics in its description only.
+        let metadata = match destination.plan {
+            Plan::New => report::metadata(job, self.source_layer, params, map),
+            Plan::InPlace { .. } => {
+                notes.push(format!(
+                    "the run's parameters and metrics are not written to the metadata tables of \
+                     the existing {:?}, which would change the other layers' metadata: the \
+                     layer's description has the metrics, -json the rest",
+                    destination.path.display()
+                ));
+                Vec::new()
+            }
+        };
+        let options = (self.layer_options)(&report::description(map));
+        let spec = write::LayerSpec {
+            name: self.layer,
+            srs: self.srs,
+            options: &options,
+            fields: &self.fields.fields,
+            metadata: &metadata,
+        };
+        let staged_path = self.staging.path();
+        let container = match &destination.plan {
+            Plan::New => Container::New {
+                driver: self.driver,
+                options: &job.dataset_options,
+            },
+            Plan::InPlace { replace } => {
+                std::fs::copy(&destination.path, &staged_path).map_err(|e| {
+                    Error::Io(format!(
+                        "cannot copy the destination {:?} to update it: {e}",
+                        destination.path.display()
+                    ))
+                })?;
+                if !job.dataset_options.is_empty() {
+                    notes.push(format!(
+                        "-dsco is ignored: the layer is added to the existing {:?}",
+                        destination.path.display()
+                    ));
+                }
+                Container::Existing {
+                    replace: replace.as_deref(),
+                }
+            }
+        };
+        let rows: Vec<Row> = map
+            .cells
+            .iter()
+            .zip(features)
+            .map(|(cell, source)| Row {
+                id: &cell.id,
+                source,
+                cell: &cell.cell,
+                computed: write::computed(cell),
+            })
+            .collect();
+        let write_start = 1.0 - WRITE_SHARE;
+        let written = write::write(session, &staged_path, &container, &spec, &rows, &|f| {
+            progress(write_start + WRITE_SHARE * f, "writing")
+        })?;
+        // The last guard: the staged layer holds every cell, field and id as the probe found.
+        if written.fields != self.fields.stored {
+            return Err(Error::Io(format!(
+                "the {format} driver named the fields {} when writing, but {} when tried",
+                written.fields.join(", "),
+                self.fields.stored.join(", ")
+            )));
+        }
+        let layer = readback::read_back(
+            session,
+            &staged_path,
+            &readback::Expected {
+                driver: &format,
+                layer: &written.layer,
+                fields: &self.fields.stored,
+                ids: self.ids,
+                features: rows.len(),
+            },
+        )?;
+        // GDAL's warnings, naming the destination rather than its staged copy.
+        let staged_name = staged_path.display().to_string();
+        notes.extend(
+            written
+                .notes
+                .into_iter()
+                .map(|note| note.replace(&staged_name, &job.dst)),
+        );
+        Ok((layer, notes))
+    }
 }
 
 /// The regions of a job's source layer, as the method receives them, and what the user should
