@@ -6,7 +6,7 @@
 use super::session::Session;
 use crate::core::Error;
 use gdal::vector::{LayerAccess, OGRwkbGeometryType};
-use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
+use gdal::{Dataset, DatasetOptions, Driver, GdalOpenFlags, Metadata};
 use std::path::Path;
 
 /// What a written layer must hold.
@@ -15,12 +15,19 @@ pub(crate) struct Expected<'a> {
     pub driver: &'a str,
     /// The layer's name, as the driver gave it.
     pub layer: &'a str,
-    /// Its fields as the driver named them, in order; a driver may add its own (CSV's `WKT`).
+    /// Its fields as the driver named them; a driver may add its own (CSV's `WKT`).
     pub fields: &'a [String],
     /// The id field (a position in `fields`) and each feature's id, in order; `None` when the
     /// ids are feature ids, which a format may renumber.
     pub ids: Option<(usize, &'a [&'a str])>,
     pub features: usize,
+}
+
+/// Whether GDAL can read what `driver` writes; a few formats are written only (PGDUMP's SQL).
+pub(crate) fn can_read(driver: &Driver) -> bool {
+    driver
+        .metadata_item("DCAP_OPEN", "")
+        .is_some_and(|v| v.eq_ignore_ascii_case("YES"))
 }
 
 /// Reads the layer at `path` back and compares it with `expected`; returns the layer's name as
@@ -36,8 +43,17 @@ pub(crate) fn read_back(
         open_flags: GdalOpenFlags::GDAL_OF_VECTOR | GdalOpenFlags::GDAL_OF_READONLY,
         ..Default::default()
     };
-    let dataset = Dataset::open_ex(path, options)
-        .map_err(|e| session.io_error(&format!("cannot read back {shown:?}"), e))?;
+    let unreadable = || {
+        let reason = session
+            .take_error()
+            .map(|reason| format!(" ({reason})"))
+            .unwrap_or_default();
+        Error::Io(format!(
+            "GDAL cannot read back the {driver} output {shown:?}{reason}, so what it holds \
+             cannot be checked"
+        ))
+    };
+    let dataset = Dataset::open_ex(path, options).map_err(|_| unreadable())?;
     let only = || match dataset.layer_count() {
         1 => dataset.layer(0),
         _ => Err(gdal::errors::GdalError::BadArgument(format!(
@@ -48,14 +64,18 @@ pub(crate) fn read_back(
     let mut layer = dataset
         .layer_by_name(expected.layer)
         .or_else(|_| only())
-        .map_err(|e| session.io_error(&format!("cannot read back {shown:?}"), e))?;
+        .map_err(|_| unreadable())?;
     let names: Vec<String> = layer.defn().fields().map(|f| f.name()).collect();
-    // Each expected field in order, extra ones allowed between them.
+    // Every expected field, by its name, exact or else in another case (LIBKML reads `name`
+    // back as its placemarks' `Name`, in its own place); a format may add fields (CSV's `WKT`).
     let mut found = Vec::with_capacity(expected.fields.len());
-    let mut rest = names.iter().enumerate();
     for name in expected.fields {
-        match rest.find(|(_, n)| *n == name) {
-            Some((index, _)) => found.push(index),
+        let index = names
+            .iter()
+            .position(|n| n == name)
+            .or_else(|| names.iter().position(|n| n.eq_ignore_ascii_case(name)));
+        match index {
+            Some(index) => found.push(index),
             None => {
                 return Err(Error::Io(format!(
                     "the {driver} output {shown:?} reads back without the field {name:?} (its \

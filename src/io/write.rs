@@ -159,14 +159,7 @@ pub(crate) fn write(
     let fail = |what: &str, e| session.io_error(&format!("cannot {what} {:?}", path.display()), e);
     let mut dataset = match container {
         Container::New { driver, options } => {
-            let mut list = CslStringList::new();
-            for option in options.iter() {
-                list.add_string(option)
-                    .map_err(|e| fail(&format!("pass -dsco {option:?} to"), e))?;
-            }
-            driver
-                .create_with_band_type_with_options::<u8, _>(path, 0, 0, 0, &list)
-                .map_err(|e| fail("create", e))?
+            create_vector(driver, path, options).map_err(|e| fail("create", e))?
         }
         Container::Existing { replace } => {
             let options = DatasetOptions {
@@ -206,6 +199,43 @@ pub(crate) fn write(
         notes: session.warnings(),
         ..written
     })
+}
+
+/// A new vector dataset with dataset creation options: the binding makes one either without
+/// options, or with options and a raster band type (which some drivers refuse: OpenFileGDB,
+/// MVT).
+fn create_vector(
+    driver: &Driver,
+    path: &Path,
+    options: &[String],
+) -> gdal::errors::Result<Dataset> {
+    let mut list = CslStringList::new();
+    for option in options {
+        list.add_string(option)?;
+    }
+    let name = CString::new(path.to_string_lossy().as_bytes())?;
+    // SAFETY: the driver handle is valid while `driver` lives; the name and the option list are
+    // NUL-terminated and outlive the call, which copies what it keeps. A non-null result is a
+    // new dataset that nothing else owns, so the binding may own and close it.
+    let dataset = unsafe {
+        gdal_sys::GDALCreate(
+            driver.c_driver(),
+            name.as_ptr(),
+            0,
+            0,
+            0,
+            gdal_sys::GDALDataType::GDT_Unknown,
+            list.as_ptr(),
+        )
+    };
+    if dataset.is_null() {
+        return Err(gdal::errors::GdalError::NullPointer {
+            method_name: "GDALCreate",
+            msg: String::new(),
+        });
+    }
+    // SAFETY: see above.
+    Ok(unsafe { Dataset::from_c_dataset(dataset) })
 }
 
 fn fill(
