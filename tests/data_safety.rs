@@ -781,6 +781,43 @@ fn csv_output_holds_the_cells_as_wkt() {
 }
 
 #[test]
+fn a_file_geodatabase_and_an_sql_dump_are_written() {
+    let scratch = Scratch::new("gdb-sql");
+    let (_, src) = source(&scratch);
+    let gdb = scratch.path("grid.gdb");
+    assert_success(&snakegrid([
+        "-q",
+        "-id",
+        "id",
+        "-f",
+        "OpenFileGDB",
+        p(&gdb),
+        p(&src),
+    ]));
+    let dataset = Dataset::open(&gdb).unwrap();
+    assert_eq!(dataset.layer(0).unwrap().feature_count(), 49);
+    // GDAL writes SQL dumps but cannot read them: written, with a note that nothing was checked.
+    let sql = scratch.path("grid.sql");
+    let out = snakegrid(["-id", "id", p(&sql), p(&src)]);
+    assert_success(&out);
+    assert!(
+        stdout(&out).contains("note: GDAL cannot read the PGDUMP format, so what it stored"),
+        "{}",
+        stdout(&out)
+    );
+    let dump = std::fs::read_to_string(&sql).unwrap();
+    assert!(
+        dump.contains("CREATE TABLE") && dump.contains("grid_col"),
+        "{dump:.200}"
+    );
+    assert_eq!(
+        dump.matches("INSERT INTO").count(),
+        49,
+        "one row per region"
+    );
+}
+
+#[test]
 fn ids_a_shapefile_would_change_are_refused_before_the_layout() {
     let scratch = Scratch::new("dbf-ids");
     let long = "x".repeat(300);
