@@ -649,8 +649,9 @@ fn a_signal_stops_the_run_removes_its_staging_and_ends_the_process_by_it() {
             }
             std::thread::sleep(std::time::Duration::from_millis(10));
         }
-        let kill = Command::new("kill")
-            .args(["-s", name, &child.id().to_string()])
+        // The shell's own kill, which every system has.
+        let kill = Command::new("sh")
+            .args(["-c", &format!("kill -s {name} {}", child.id())])
             .status()
             .unwrap();
         assert!(kill.success());
