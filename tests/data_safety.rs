@@ -360,6 +360,23 @@ fn update_adds_a_layer_and_refuses_one_that_exists() {
         "already has a layer \"second\" (use -overwrite to replace it",
     );
     assert_eq!(std::fs::read(&dst).unwrap(), before);
+    // A GeoPackage another program has open is not updated behind its back.
+    let wal = scratch.path("grid.gpkg-wal");
+    std::fs::write(&wal, b"pages not yet in the file").unwrap();
+    let out = snakegrid([
+        "-q",
+        "-update",
+        "-id",
+        "id",
+        "-nln",
+        "third",
+        p(&dst),
+        p(&src),
+    ]);
+    assert_fails(&out, 1, "is in use");
+    assert!(stderr(&out).contains("grid.gpkg-wal"), "{}", stderr(&out));
+    assert_eq!(std::fs::read(&dst).unwrap(), before);
+    std::fs::remove_file(&wal).unwrap();
     // A single-layer format cannot take a second layer.
     let geojson = scratch.path("grid.geojson");
     assert_success(&snakegrid(["-q", "-id", "id", p(&geojson), p(&src)]));

@@ -85,6 +85,21 @@ impl Destination {
                 displaced: Vec::new(),
             });
         };
+        // A write-ahead log or rollback journal holds what the database file does not yet
+        // (SQLite's shared-memory index, -shm, holds none of the data). Checked before GDAL
+        // opens the file: SQLite may apply or remove a journal when a connection closes.
+        let journal = existing
+            .iter()
+            .skip(1)
+            .find(|file| !file.to_string_lossy().ends_with("-shm"));
+        if let Some(journal) = journal {
+            return Err(Error::Io(format!(
+                "the destination {shown:?} is in use ({:?} exists: another program has it open, \
+                 or did not close it): close it first, as snakegrid replaces the file with a \
+                 new or updated copy",
+                journal.display()
+            )));
+        }
         let options = DatasetOptions {
             open_flags: GdalOpenFlags::GDAL_OF_VECTOR
                 | GdalOpenFlags::GDAL_OF_RASTER
@@ -113,20 +128,6 @@ impl Destination {
         let files = own_files(&path, &file_list(&old));
         let single_file = files.iter().all(|f| f.file_name() == path.file_name());
         if format == output && single_file && layers_in_place {
-            let journal = SQLITE_JOURNALS.iter().find_map(|suffix| {
-                let mut name = path.clone().into_os_string();
-                name.push(suffix);
-                let name = PathBuf::from(name);
-                (suffix != &"-shm" && name.exists()).then_some(name)
-            });
-            if let Some(journal) = journal {
-                return Err(Error::Io(format!(
-                    "the destination {shown:?} is in use ({:?} exists: another program has it \
-                     open, or did not close it): close it first, as snakegrid replaces the file \
-                     with an updated copy",
-                    journal.display()
-                )));
-            }
             let same = layers.iter().find(|l| l.eq_ignore_ascii_case(layer));
             if let (Mode::Update, Some(same)) = (mode, same) {
                 return Err(Error::Io(format!(
