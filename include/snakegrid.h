@@ -194,8 +194,8 @@ typedef struct snakegrid_crs snakegrid_crs;
 
 /**
  * Where to read regions and where to write the grid map. Made by snakegrid_job_new(),
- * described by snakegrid_job_set() and snakegrid_job_set_overwrite(), run by
- * snakegrid_run_job(), freed by snakegrid_job_free().
+ * described by snakegrid_job_set(), snakegrid_job_set_overwrite() and
+ * snakegrid_job_set_update(), run by snakegrid_run_job(), freed by snakegrid_job_free().
  */
 typedef struct snakegrid_job snakegrid_job;
 
@@ -592,7 +592,8 @@ snakegrid_status snakegrid_regions_add_feature(struct snakegrid_regions *regions
                                                size_t wkb_len);
 
 /**
- * Makes an empty job (no source, no destination, no overwrite) and writes it to `*out`.
+ * Makes an empty job (no source, no destination, no overwrite, no update) and writes it to
+ * `*out`.
  *
  * Thread safety: safe from any thread.
  */
@@ -615,14 +616,18 @@ void snakegrid_job_free(struct snakegrid_job *job);
  * - "dst": destination dataset path; required;
  * - "format": GDAL driver short name (default: from the extension, else GPKG);
  * - "layer_name": output layer name (default: the source layer's);
+ * - "s_srs": the source's CRS, any definition GDAL accepts, in place of the one it has;
  * - "target_srs": working CRS, any definition GDAL accepts (default: the source's if
  *   projected, else a Lambert azimuthal equal-area CRS at its centre);
  * - "json_report": path of a machine-readable report to write;
  * - "svg": path of a picture of the source and the grid map to write;
- * - "label_field": short label field for the picture.
+ * - "label_field": short label field for the picture;
+ * - "lco": one layer creation option of the output driver, NAME=VALUE; each call adds one
+ *   (as -lco does each time it is given), NULL clears them all;
+ * - "dsco": one dataset creation option, NAME=VALUE; likewise.
  *
- * Fails with SNAKEGRID_INVALID_ARGUMENT for another name. Thread safety: not concurrently with
- * any other use of the same handle.
+ * Fails with SNAKEGRID_INVALID_ARGUMENT for another name, or an "lco" or "dsco" value that is
+ * not NAME=VALUE. Thread safety: not concurrently with any other use of the same handle.
  */
 SNAKEGRID_MUST_USE
 snakegrid_status snakegrid_job_set(struct snakegrid_job *job,
@@ -630,14 +635,25 @@ snakegrid_status snakegrid_job_set(struct snakegrid_job *job,
                                    const char *value);
 
 /**
- * Whether an existing destination may be replaced (the command line's -overwrite); it is
- * replaced only once the run has succeeded. Off when the job is made.
+ * Whether what is at the outputs may be replaced (the command line's -overwrite): the layer of a
+ * dataset that holds several (GeoPackage; the other layers are kept), else the whole file, never
+ * a file that holds other layers; only once the run has succeeded. Off when the job is made.
  *
  * Thread safety: not concurrently with any other use of the same handle.
  */
 SNAKEGRID_MUST_USE
 snakegrid_status snakegrid_job_set_overwrite(struct snakegrid_job *job,
                                              bool overwrite);
+
+/**
+ * Whether the layer is added to the existing destination dataset (the command line's
+ * -update); the run then fails if the destination does not exist, cannot hold another layer,
+ * or has a layer of that name (unless overwrite is on too, which replaces it). Off when the
+ * job is made.
+ *
+ * Thread safety: not concurrently with any other use of the same handle.
+ */
+snakegrid_status snakegrid_job_set_update(struct snakegrid_job *job, bool update);
 
 /**
  * Makes a grid map of the regions in memory with the given options and writes a new result
@@ -660,12 +676,14 @@ snakegrid_status snakegrid_run(const struct snakegrid_regions *regions,
  * Runs a job: reads the regions from the source dataset, makes the grid map, writes the
  * destination (and the report and picture when asked), all through GDAL exactly as the
  * command line does, and writes a new result handle to `*result`. `progress` and `user_data`
- * may be NULL. On failure nothing is left at the destination.
+ * may be NULL. On failure or cancellation every existing output is left as it was and nothing
+ * new is left behind.
  *
  * Fails with SNAKEGRID_UNSUPPORTED in a build without GDAL; otherwise with SNAKEGRID_IO_ERROR
- * (the source cannot be read, the destination cannot be written
- * or exists without overwrite), SNAKEGRID_INVALID_INPUT, SNAKEGRID_CANCELLED or
- * SNAKEGRID_INTERNAL_ERROR. Thread safety: as snakegrid_run(); two jobs with the same
+ * (the source cannot be read; the destination cannot be written, exists without overwrite or
+ * update, or is a format that would not keep the grid), SNAKEGRID_INVALID_INPUT (including an
+ * id the output format would change), SNAKEGRID_CANCELLED or SNAKEGRID_INTERNAL_ERROR. Thread
+ * safety: as snakegrid_run(); two jobs with the same
  * destination must not run at once.
  */
 SNAKEGRID_MUST_USE

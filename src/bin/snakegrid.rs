@@ -2,12 +2,15 @@
 //! the style of ogr2ogr (single-dash long options such as `-nln`, `-overwrite`, `-where`).
 
 use clap::{Arg, ColorChoice, Command, CommandFactory, FromArgMatches, Parser};
+use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+use signal_hook::{flag, low_level};
 use snakegrid::io::{self, Job};
-use snakegrid::{Params, PARAMETERS};
-use std::ffi::OsString;
+use snakegrid::{Error, Params, PARAMETERS};
+use std::ffi::{c_int, OsString};
 use std::io::Write;
 use std::process::ExitCode;
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 /// Make a grid map (tile map): one equal square cell per region, placed so that cells stay near
 /// their regions, neighbours stay neighbours, directions hold and the whole keeps the map's
@@ -34,9 +37,16 @@ struct Cli {
     /// Name of the output layer [default: the source layer's name]
     #[arg(long = "nln", value_name = "NAME", allow_hyphen_values = true)]
     nln: Option<String>,
-    /// Replace DST (and the -json and -svg files) if they exist, once the run has succeeded
+    /// Replace the layer in DST (or DST itself, for a single-layer format) and the -json and -svg
+    /// files if they exist, once the run has succeeded
     #[arg(long = "overwrite")]
     overwrite: bool,
+    /// Add the layer to the existing dataset DST (refused if it has a layer of that name)
+    #[arg(long = "update")]
+    update: bool,
+    /// Source CRS, any definition GDAL accepts, in place of the one the source has
+    #[arg(long = "s_srs", value_name = "CRS", allow_hyphen_values = true)]
+    s_srs: Option<String>,
     /// Only the features matching this OGR SQL attribute filter
     #[arg(long = "where", value_name = "EXPR", allow_hyphen_values = true)]
     where_clause: Option<String>,
@@ -56,6 +66,12 @@ struct Cli {
     /// Short name field for the cells of the -svg picture [default: abbr, else name, else the id]
     #[arg(long = "label", value_name = "FIELD", allow_hyphen_values = true)]
     label: Option<String>,
+    /// Layer creation option of the output driver (repeatable)
+    #[arg(long = "lco", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    lco: Vec<String>,
+    /// Dataset creation option of the output driver (repeatable)
+    #[arg(long = "dsco", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    dsco: Vec<String>,
     /// Quiet: no progress line and no summary
     #[arg(short = 'q', long = "quiet")]
     quiet: bool,
@@ -94,7 +110,8 @@ fn command() -> Command {
     Cli::command().version(version).args(parameters).after_help(
         "Long options may be written with one dash, as in ogr2ogr: -nln, -overwrite, -where, \
              -alpha 2.\nExit status: 0 on success, 1 on error, 2 on a usage error; on error no \
-             output is left behind.",
+             output is left behind. SIGINT, SIGTERM and SIGHUP stop the run, remove what it was \
+             writing and end the process by the same signal.",
     )
 }
 
@@ -221,6 +238,45 @@ fn advance(ticks: &mut i32, fraction: f64) -> String {
     text
 }
 
+/// The signals that end a run early. The run stops at its next progress report, which removes
+/// its staging folders, and the process then ends by the same signal, so that the shell sees
+/// 130, 143 or 129 and a script stops too.
+const TERMINATING: [c_int; 3] = [SIGINT, SIGTERM, SIGHUP];
+
+/// Catches [`TERMINATING`]; the number it returns becomes the first signal caught (0: none). A
+/// second signal ends the process at once, for a user who will not wait for the cleanup.
+fn catch_signals() -> Arc<AtomicUsize> {
+    let caught = Arc::new(AtomicUsize::new(0));
+    let once = Arc::new(AtomicBool::new(false));
+    for signal in TERMINATING {
+        // Registered in this order, the first handler sees `once` still false on the first
+        // signal. Should registering fail, the signal keeps its default action, which ends the
+        // run too, without the cleanup.
+        let _ = flag::register_conditional_default(signal, Arc::clone(&once));
+        let _ = flag::register(signal, Arc::clone(&once));
+        let _ = flag::register_usize(signal, Arc::clone(&caught), signal as usize);
+    }
+    caught
+}
+
+/// Ends the process by `signal`, as if it had not been caught.
+fn end_by(signal: c_int, outputs_written: bool) -> ExitCode {
+    let name = low_level::signal_name(signal).unwrap_or("a signal");
+    let outcome = if outputs_written {
+        "it came too late to stop the run: the outputs are complete"
+    } else {
+        "nothing was written"
+    };
+    // The terminal may be gone (SIGHUP): a failed write must not stop the rest.
+    let _ = writeln!(
+        std::io::stderr(),
+        "snakegrid: interrupted by {name}; {outcome}"
+    );
+    let _ = low_level::emulate_default_handler(signal);
+    // Not reached for these signals; the shell's own code for them, should it be.
+    ExitCode::from(128u8.saturating_add(u8::try_from(signal).unwrap_or(0)))
+}
+
 fn usage_error(message: &str) -> ExitCode {
     eprintln!("snakegrid: ERROR: {message} (see --help)");
     ExitCode::from(2)
@@ -266,18 +322,38 @@ fn main() -> ExitCode {
         format: cli.format,
         layer_name: cli.nln,
         overwrite: cli.overwrite,
+        update: cli.update,
+        source_srs: cli.s_srs,
         target_srs: cli.t_srs,
         json_report: cli.json,
         svg: cli.svg,
         label_field: cli.label,
+        dataset_options: cli.dsco,
+        layer_options: cli.lco,
     };
     let progress = TermProgress {
         ticks: Mutex::new(-1),
     };
     let quiet = cli.quiet;
+    let caught = catch_signals();
+    let interrupted = || caught.load(Ordering::SeqCst) as c_int;
+    // A caught signal cancels the run through its progress reports, as a host's callback would.
     let result = io::run(&job, &params, &|fraction, _| {
-        quiet || progress.update(fraction)
+        interrupted() == 0 && (quiet || progress.update(fraction))
     });
+    let signal = interrupted();
+    if signal != 0 {
+        progress.interrupt();
+        // An error other than the cancellation the signal caused is still worth reading.
+        if let Some(e) = result
+            .as_ref()
+            .err()
+            .filter(|e| !matches!(e, Error::Cancelled))
+        {
+            let _ = writeln!(std::io::stderr(), "snakegrid: ERROR: {e}");
+        }
+        return end_by(signal, result.is_ok());
+    }
     match result {
         Ok(outcome) => {
             if !quiet {

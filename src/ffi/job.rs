@@ -7,8 +7,8 @@ use crate::job::Job;
 use std::ffi::c_char;
 
 /// Where to read regions and where to write the grid map. Made by snakegrid_job_new(),
-/// described by snakegrid_job_set() and snakegrid_job_set_overwrite(), run by
-/// snakegrid_run_job(), freed by snakegrid_job_free().
+/// described by snakegrid_job_set(), snakegrid_job_set_overwrite() and
+/// snakegrid_job_set_update(), run by snakegrid_run_job(), freed by snakegrid_job_free().
 pub struct DatasetJob {
     _opaque: [u8; 0],
 }
@@ -21,10 +21,11 @@ impl Handle for DatasetJob {
 
 /// The settings snakegrid_job_set() knows, each with the command-line option it mirrors.
 const SETTINGS: &str = "src (SRC), src_layer (SRC_LAYER), where (-where), id_field (-id), \
-    dst (DST), format (-f), layer_name (-nln), target_srs (-t_srs), json_report (-json), \
-    svg (-svg), label_field (-label)";
+    dst (DST), format (-f), layer_name (-nln), s_srs (-s_srs), target_srs (-t_srs), \
+    json_report (-json), svg (-svg), label_field (-label), lco (-lco), dsco (-dsco)";
 
-/// Makes an empty job (no source, no destination, no overwrite) and writes it to `*out`.
+/// Makes an empty job (no source, no destination, no overwrite, no update) and writes it to
+/// `*out`.
 ///
 /// Thread safety: safe from any thread.
 #[must_use]
@@ -56,14 +57,18 @@ pub unsafe extern "C" fn snakegrid_job_free(job: *mut DatasetJob) {
 /// - "dst": destination dataset path; required;
 /// - "format": GDAL driver short name (default: from the extension, else GPKG);
 /// - "layer_name": output layer name (default: the source layer's);
+/// - "s_srs": the source's CRS, any definition GDAL accepts, in place of the one it has;
 /// - "target_srs": working CRS, any definition GDAL accepts (default: the source's if
 ///   projected, else a Lambert azimuthal equal-area CRS at its centre);
 /// - "json_report": path of a machine-readable report to write;
 /// - "svg": path of a picture of the source and the grid map to write;
-/// - "label_field": short label field for the picture.
+/// - "label_field": short label field for the picture;
+/// - "lco": one layer creation option of the output driver, NAME=VALUE; each call adds one
+///   (as -lco does each time it is given), NULL clears them all;
+/// - "dsco": one dataset creation option, NAME=VALUE; likewise.
 ///
-/// Fails with SNAKEGRID_INVALID_ARGUMENT for another name. Thread safety: not concurrently with
-/// any other use of the same handle.
+/// Fails with SNAKEGRID_INVALID_ARGUMENT for another name, or an "lco" or "dsco" value that is
+/// not NAME=VALUE. Thread safety: not concurrently with any other use of the same handle.
 #[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_job_set(
@@ -85,10 +90,25 @@ pub unsafe extern "C" fn snakegrid_job_set(
         match name {
             "src" => job.src = value.unwrap_or_default(),
             "dst" => job.dst = value.unwrap_or_default(),
+            "lco" => add_option(&mut job.layer_options, name, value)?,
+            "dsco" => add_option(&mut job.dataset_options, name, value)?,
             _ => *optional_setting(job, name)? = value,
         }
         Ok(())
     })
+}
+
+/// Adds a creation option to `list` (`name`: the setting), or clears the list for NULL.
+fn add_option(list: &mut Vec<String>, name: &str, value: Option<String>) -> Result<(), Failure> {
+    match value {
+        Some(option) => {
+            crate::job::check_creation_option(name, &option)
+                .map_err(|message| Failure::new(Status::INVALID_ARGUMENT, message))?;
+            list.push(option);
+        }
+        None => list.clear(),
+    }
+    Ok(())
 }
 
 fn optional_setting<'a>(job: &'a mut Job, name: &str) -> Result<&'a mut Option<String>, Failure> {
@@ -98,6 +118,7 @@ fn optional_setting<'a>(job: &'a mut Job, name: &str) -> Result<&'a mut Option<S
         "id_field" => &mut job.id_field,
         "format" => &mut job.format,
         "layer_name" => &mut job.layer_name,
+        "s_srs" => &mut job.source_srs,
         "target_srs" => &mut job.target_srs,
         "json_report" => &mut job.json_report,
         "svg" => &mut job.svg,
@@ -111,8 +132,9 @@ fn optional_setting<'a>(job: &'a mut Job, name: &str) -> Result<&'a mut Option<S
     })
 }
 
-/// Whether an existing destination may be replaced (the command line's -overwrite); it is
-/// replaced only once the run has succeeded. Off when the job is made.
+/// Whether what is at the outputs may be replaced (the command line's -overwrite): the layer of a
+/// dataset that holds several (GeoPackage; the other layers are kept), else the whole file, never
+/// a file that holds other layers; only once the run has succeeded. Off when the job is made.
 ///
 /// Thread safety: not concurrently with any other use of the same handle.
 #[must_use]
@@ -124,6 +146,21 @@ pub unsafe extern "C" fn snakegrid_job_set_overwrite(
     guard("snakegrid_job_set_overwrite", || {
         // SAFETY: a live handle nobody else uses meanwhile (header contract).
         unsafe { handle::get_mut(job, "job") }?.overwrite = overwrite;
+        Ok(())
+    })
+}
+
+/// Whether the layer is added to the existing destination dataset (the command line's
+/// -update); the run then fails if the destination does not exist, cannot hold another layer,
+/// or has a layer of that name (unless overwrite is on too, which replaces it). Off when the
+/// job is made.
+///
+/// Thread safety: not concurrently with any other use of the same handle.
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_job_set_update(job: *mut DatasetJob, update: bool) -> Status {
+    guard("snakegrid_job_set_update", || {
+        // SAFETY: a live handle nobody else uses meanwhile (header contract).
+        unsafe { handle::get_mut(job, "job") }?.update = update;
         Ok(())
     })
 }

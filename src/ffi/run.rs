@@ -117,12 +117,14 @@ pub unsafe extern "C" fn snakegrid_run(
 /// Runs a job: reads the regions from the source dataset, makes the grid map, writes the
 /// destination (and the report and picture when asked), all through GDAL exactly as the
 /// command line does, and writes a new result handle to `*result`. `progress` and `user_data`
-/// may be NULL. On failure nothing is left at the destination.
+/// may be NULL. On failure or cancellation every existing output is left as it was and nothing
+/// new is left behind.
 ///
 /// Fails with SNAKEGRID_UNSUPPORTED in a build without GDAL; otherwise with SNAKEGRID_IO_ERROR
-/// (the source cannot be read, the destination cannot be written
-/// or exists without overwrite), SNAKEGRID_INVALID_INPUT, SNAKEGRID_CANCELLED or
-/// SNAKEGRID_INTERNAL_ERROR. Thread safety: as snakegrid_run(); two jobs with the same
+/// (the source cannot be read; the destination cannot be written, exists without overwrite or
+/// update, or is a format that would not keep the grid), SNAKEGRID_INVALID_INPUT (including an
+/// id the output format would change), SNAKEGRID_CANCELLED or SNAKEGRID_INTERNAL_ERROR. Thread
+/// safety: as snakegrid_run(); two jobs with the same
 /// destination must not run at once.
 #[must_use]
 #[no_mangle]

@@ -3,34 +3,48 @@
 //! call [`run`], so they behave the same.
 //!
 //! - [`read`]: open the source, pick the layer, `-where`, features → regions;
-//! - [`crs`]: the working CRS (automatic equal-area projection of geographic layers, `-t_srs`);
+//! - [`crs`]: the working CRS (`-s_srs`, `-t_srs`, the automatic equal-area projection);
+//! - [`options`]: creation options, the user's (`-dsco`, `-lco`) and snakegrid's own;
+//! - [`probe`]: what the output driver makes of the layer, tried in memory before the run;
+//! - [`destination`]: what may happen to what is already at an output (`-update`, `-overwrite`);
 //! - [`write`]: the grid layer with the source attributes, cell and metric fields, metadata;
-//! - [`output`]: staging folders, so an output appears whole or not at all;
+//! - [`readback`]: an output read back to prove it holds what it claims;
+//! - [`staging`]: the folders outputs are written in, locked while a run lives;
+//! - [`commit`]: every output moved into place together, or none;
 //! - [`report`]: the JSON report, the layer metadata and the printed summary;
 //! - [`svg`]: the side-by-side picture;
 //! - [`session`]: GDAL's messages caught and a fixed date for the length of a run.
 
+mod commit;
 mod crs;
-mod output;
+mod destination;
+mod options;
 mod paths;
+mod probe;
 mod read;
+mod readback;
 mod report;
 mod session;
+mod staging;
 mod svg;
 mod write;
 
 pub use report::summary;
-pub use write::{CELL_DISP, GRID_COL, GRID_ROW, NBR_KEPT, ORIENT_ERR};
 
 use crate::core::{Error, GridMap, Params, Progress, Region};
 pub use crate::job::Job;
+use commit::Staged;
+use destination::{Destination, Mode, Plan};
 use gdal::spatial_ref::SpatialRef;
 use gdal::vector::LayerAccess;
 use gdal::vector::{Feature, Layer};
-use output::{Staged, Target};
+use gdal::Driver;
 use paths::SourceFiles;
 use session::Session;
+use staging::Staging;
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
+use write::{Container, Row};
 
 /// What a successful run produced.
 #[derive(Clone, Debug)]
@@ -53,7 +67,8 @@ const READ_SHARE: f64 = 0.05;
 const WRITE_SHARE: f64 = 0.08;
 
 /// Reads the source, runs the method, writes the destination (and the report and picture when
-/// asked). On any error nothing is left at the destination.
+/// asked). On any error or cancellation every existing output is left as it was, and nothing
+/// new is left behind.
 pub fn run(job: &Job, params: &Params, progress: Progress) -> Result<Outcome, Error> {
     params.validate().map_err(Error::InvalidParameter)?;
     let session = Session::start();
@@ -73,8 +88,17 @@ fn run_in(
             Err(Error::Cancelled)
         }
     };
-    // Everything that can be refused without reading is refused before any work.
+    // Everything that can be refused without reading a feature is refused before any work.
+    for (flag, list) in [
+        ("-dsco", &job.dataset_options),
+        ("-lco", &job.layer_options),
+    ] {
+        for option in list {
+            crate::job::check_creation_option(flag, option).map_err(Error::InvalidParameter)?;
+        }
+    }
     let driver = write::driver(job.format.as_deref(), &job.dst)?;
+    let format = driver.short_name();
     let dataset = read::open(session, &job.src)?;
     let source_files = SourceFiles::of(&dataset, &job.src);
     let outputs = outputs(job);
@@ -82,19 +106,66 @@ fn run_in(
         source_files.refuse(what, Path::new(path))?;
     }
     distinct_outputs(&outputs)?;
-    let target = Target::check(&job.dst, "destination", job.overwrite, true)?;
-    let check_extra = |path: &Option<String>, what| {
-        path.as_deref()
-            .map(|p| Target::check(p, what, job.overwrite, false))
-            .transpose()
-    };
-    let json_target = check_extra(&job.json_report, "JSON report")?;
-    let svg_target = check_extra(&job.svg, "picture")?;
+    let file_name = Path::new(&job.dst)
+        .file_name()
+        .ok_or_else(|| Error::Io(format!("the destination {:?} is not a file name", job.dst)))?;
 
     let mut layer = read::layer(&dataset, job.src_layer.as_deref())?;
     let source_layer = layer.name();
+    let layer_name = job
+        .layer_name
+        .clone()
+        .unwrap_or_else(|| source_layer.clone());
+    let source_names: Vec<String> = layer.defn().fields().map(|f| f.name()).collect();
+    let taken: Vec<&str> = (source_names.iter().map(String::as_str))
+        .chain(write::computed_fields().map(|(name, _)| name))
+        .collect();
+    let layer_options = |description: &str| {
+        options::layer_options(&driver, &job.layer_options, &taken, description)
+    };
+    let trial_options = layer_options("snakegrid grid map");
+    let trial = probe::Trial {
+        session,
+        driver: &driver,
+        dataset_options: &job.dataset_options,
+        layer_options: &trial_options,
+        layer: &layer_name,
+        file_name,
+    };
+    let fields = trial.fields(layer.defn())?;
+    let mode = Mode::of(job.update, job.overwrite);
+    let destination = Destination::dataset(
+        session,
+        &job.dst,
+        mode,
+        &driver,
+        &layer_name,
+        fields.layers_in_place,
+    )?;
+    let extra = |path: &Option<String>, what| {
+        path.as_deref()
+            .map(|p| Destination::file(p, what, mode))
+            .transpose()
+    };
+    let json_destination = extra(&job.json_report, "JSON report")?;
+    let svg_destination = extra(&job.svg, "picture")?;
+
+    // Staging folders (after removing those that killed runs left), so that a run that cannot
+    // write beside an output fails now rather than after the layout.
+    let all = std::iter::once(&destination)
+        .chain(&json_destination)
+        .chain(&svg_destination);
+    let folders: BTreeSet<PathBuf> = all.map(|d| staging::folder_of(&d.path)).collect();
+    let mut notes: Vec<String> = folders.iter().flat_map(|f| staging::sweep(f)).collect();
+    let dst_staging = Staging::new(&destination.path, "destination")?;
+    let stage = |d: Option<Destination>, what| {
+        d.map(|d| Staging::new(&d.path, what).map(|s| (d, s)))
+            .transpose()
+    };
+    let json_staging = stage(json_destination, "JSON report")?;
+    let svg_staging = stage(svg_destination, "picture")?;
+
     let Source {
-        fields,
         id_field,
         label_field,
         source_srs,
@@ -102,7 +173,15 @@ fn run_in(
         plan,
         regions,
         labels,
+        notes: source_notes,
     } = Source::read(session, job, &mut layer)?;
+    // The ids as the output would store them, before the layout.
+    let id_position = id_field.and_then(|i| fields.fields.iter().position(|f| f.source == i));
+    let ids: Vec<&str> = regions.iter().map(|r| r.id.as_str()).collect();
+    if let Some(position) = id_position {
+        let pairs: Vec<(&str, &Feature)> = ids.iter().copied().zip(&features).collect();
+        trial.ids(&fields, &pairs, position)?;
+    }
     step(READ_SHARE, "laying out")?;
 
     let layout_share = 1.0 - READ_SHARE - WRITE_SHARE;
@@ -110,75 +189,209 @@ fn run_in(
         progress(READ_SHARE + layout_share * fraction, message)
     })?;
 
-    let staged = Staged::new(target)?;
-    let layer_name = job.layer_name.as_deref().unwrap_or(&source_layer);
-    let metadata = report::metadata(job, &source_layer, params, &map);
-    let description = report::description(&map);
-    let spec = write::LayerSpec {
-        name: layer_name,
-        source_fields: &fields,
-        srs: plan.working.as_ref(),
-        metadata: &metadata,
-        description: &description,
-    };
-    let write_start = 1.0 - WRITE_SHARE;
-    let written = write::write(
+    let grid = StagedGrid {
         session,
-        &staged.path(),
-        &driver,
-        &spec,
-        &features,
-        &map,
-        &|f| progress(write_start + WRITE_SHARE * f, "writing"),
-    )?;
-    let mut notes: Vec<String> = plan.note.into_iter().collect();
-    notes.extend(map.notes.iter().cloned());
-    notes.extend(written.notes);
+        job,
+        driver: &driver,
+        destination: &destination,
+        staging: &dst_staging,
+        layer: &layer_name,
+        source_layer: &source_layer,
+        srs: plan.working.as_ref(),
+        fields: &fields,
+        layer_options: &layer_options,
+        ids: id_position.map(|position| (position, ids.as_slice())),
+    };
+    let (layer_written, grid_notes) = grid.write(params, &map, &features, progress)?;
+
+    let mut all_notes: Vec<String> = source_notes;
+    all_notes.extend(map.notes.iter().cloned());
+    all_notes.append(&mut notes);
+    all_notes.extend(fields.notes);
+    for note in grid_notes {
+        if !all_notes.contains(&note) {
+            all_notes.push(note);
+        }
+    }
     let outcome = Outcome {
         map,
-        notes,
+        notes: all_notes,
         source_layer,
-        layer: written.layer,
-        format: driver.short_name(),
+        layer: layer_written,
+        format,
         crs: plan.working.as_ref().map(crs::describe),
     };
 
-    let json = json_target
-        .map(|target| {
-            let source = report::SourceInfo {
-                dataset: &job.src,
-                layer: &outcome.source_layer,
-                where_clause: job.where_clause.as_deref(),
-                id_field: id_field.map(|i| fields[i].as_str()),
-                label_field: label_field.map(|i| fields[i].as_str()),
-                features: features.len(),
-            };
-            let crs = report::CrsInfo {
-                source: source_srs.as_ref().map(crs::describe),
-                working: outcome.crs.clone(),
-                working_projjson: plan
-                    .working
-                    .as_ref()
-                    .and_then(|s| s.to_projjson().ok())
-                    .and_then(|text| serde_json::from_str(&text).ok()),
-                projected: plan.transform.is_some(),
-            };
-            let text = report::json(job, params, &outcome, source, crs, &labels)?;
-            stage_text(target, &text)
-        })
-        .transpose()?;
-    let picture = svg_target
-        .map(|target| stage_text(target, &svg::render(&regions, &labels, &outcome.map)))
-        .transpose()?;
-
-    // Only now does anything appear at, or disappear from, the destinations.
-    staged.commit(session, job.overwrite, &source_files)?;
-    for extra in json.into_iter().chain(picture) {
-        extra.commit(session, job.overwrite, &source_files)?;
+    let mut staged = vec![Staged {
+        what: "destination",
+        destination: destination.path,
+        staging: dst_staging,
+        displaced: destination.displaced,
+    }];
+    if let Some((json, staging)) = json_staging {
+        let source = report::SourceInfo {
+            dataset: &job.src,
+            layer: &outcome.source_layer,
+            where_clause: job.where_clause.as_deref(),
+            id_field: id_field.map(|i| source_names[i].as_str()),
+            label_field: label_field.map(|i| source_names[i].as_str()),
+            features: features.len(),
+        };
+        let crs = report::CrsInfo {
+            source: source_srs.as_ref().map(crs::describe),
+            working: outcome.crs.clone(),
+            working_projjson: plan
+                .working
+                .as_ref()
+                .and_then(|s| s.to_projjson().ok())
+                .and_then(|text| serde_json::from_str(&text).ok()),
+            projected: plan.transform.is_some(),
+        };
+        let text = report::json(job, params, &outcome, source, crs, &labels)?;
+        staged.push(stage_text("JSON report", json, staging, &text)?);
     }
+    if let Some((svg, staging)) = svg_staging {
+        let picture = svg::render(&regions, &labels, &outcome.map);
+        staged.push(stage_text("picture", svg, staging, &picture)?);
+    }
+
+    // The last chance to cancel; only now does anything appear at, or disappear from, the
+    // destinations.
+    step(1.0, "moving the outputs into place")?;
+    commit::commit(staged, job.overwrite, &source_files)?;
     // Too late to cancel: the outputs are in place.
     progress(1.0, "done");
     Ok(outcome)
+}
+
+/// The grid layer of a run as it is written in the destination's staging folder.
+struct StagedGrid<'a> {
+    session: &'a Session,
+    job: &'a Job,
+    driver: &'a Driver,
+    destination: &'a Destination,
+    staging: &'a Staging,
+    layer: &'a str,
+    source_layer: &'a str,
+    srs: Option<&'a SpatialRef>,
+    /// The fields as the probe found the driver names them.
+    fields: &'a probe::Fields,
+    /// The layer creation options, given the layer's description.
+    layer_options: &'a dyn Fn(&str) -> Vec<String>,
+    /// The id field's position among the fields, and every region's id in input order.
+    ids: Option<(usize, &'a [&'a str])>,
+}
+
+impl StagedGrid<'_> {
+    /// Writes `map`'s cells with the attributes of `features` (in the same order) into the
+    /// staging folder, as a new dataset or into a copy of the existing one, and reads it back as
+    /// a last guard. Returns the layer's name as written and what the user should know.
+    fn write(
+        &self,
+        params: &Params,
+        map: &GridMap,
+        features: &[Feature],
+        progress: Progress,
+    ) -> Result<(String, Vec<String>), Error> {
+        let (session, job, destination) = (self.session, self.job, self.destination);
+        let format = self.driver.short_name();
+        let mut notes = Vec::new();
+        // Layer metadata set in an existing GeoPackage makes GDAL rewrite the metadata of
+        // every other layer (their timestamps change), so a layer added in place keeps its
+        // metrics in its description only.
+        let metadata = match destination.plan {
+            Plan::New => report::metadata(job, self.source_layer, params, map),
+            Plan::InPlace { .. } => {
+                notes.push(format!(
+                    "the run's parameters and metrics are not written to the metadata tables of \
+                     the existing {:?}, which would change the other layers' metadata: the \
+                     layer's description has the metrics, -json the rest",
+                    destination.path.display()
+                ));
+                Vec::new()
+            }
+        };
+        let options = (self.layer_options)(&report::description(map));
+        let spec = write::LayerSpec {
+            name: self.layer,
+            srs: self.srs,
+            options: &options,
+            fields: &self.fields.fields,
+            metadata: &metadata,
+        };
+        let staged_path = self.staging.path();
+        let container = match &destination.plan {
+            Plan::New => Container::New {
+                driver: self.driver,
+                options: &job.dataset_options,
+            },
+            Plan::InPlace { replace } => {
+                std::fs::copy(&destination.path, &staged_path).map_err(|e| {
+                    Error::Io(format!(
+                        "cannot copy the destination {:?} to update it: {e}",
+                        destination.path.display()
+                    ))
+                })?;
+                if !job.dataset_options.is_empty() {
+                    notes.push(format!(
+                        "-dsco is ignored: the layer is added to the existing {:?}",
+                        destination.path.display()
+                    ));
+                }
+                Container::Existing {
+                    replace: replace.as_deref(),
+                }
+            }
+        };
+        let rows: Vec<Row> = map
+            .cells
+            .iter()
+            .zip(features)
+            .map(|(cell, source)| Row {
+                id: &cell.id,
+                source,
+                cell: &cell.cell,
+                computed: write::computed(cell),
+            })
+            .collect();
+        let write_start = 1.0 - WRITE_SHARE;
+        let written = write::write(session, &staged_path, &container, &spec, &rows, &|f| {
+            progress(write_start + WRITE_SHARE * f, "writing")
+        })?;
+        // The last guard: the staged layer holds every cell, field and id as the probe found.
+        if written.fields != self.fields.stored {
+            return Err(Error::Io(format!(
+                "the {format} driver named the fields {} when writing, but {} when tried",
+                written.fields.join(", "),
+                self.fields.stored.join(", ")
+            )));
+        }
+        let expected = readback::Expected {
+            driver: &format,
+            layer: &written.layer,
+            fields: &self.fields.stored,
+            ids: self.ids,
+            features: rows.len(),
+        };
+        let layer = if readback::can_read(self.driver) {
+            readback::read_back(session, &staged_path, &expected)?
+        } else {
+            notes.push(format!(
+                "GDAL cannot read the {format} format, so what it stored (the ids among it) \
+                 could not be checked"
+            ));
+            written.layer
+        };
+        // GDAL's warnings, naming the destination rather than its staged copy.
+        let staged_name = staged_path.display().to_string();
+        notes.extend(
+            written
+                .notes
+                .into_iter()
+                .map(|note| note.replace(&staged_name, &job.dst)),
+        );
+        Ok((layer, notes))
+    }
 }
 
 /// The regions of a job's source layer, as the method receives them, and what the user should
@@ -201,13 +414,12 @@ pub fn read_regions(job: &Job) -> Result<SourceRegions, Error> {
     Ok(SourceRegions {
         regions: source.regions,
         labels: source.labels,
-        notes: source.plan.note.into_iter().collect(),
+        notes: source.notes,
     })
 }
 
 /// A source layer read, checked and projected.
 struct Source<'l> {
-    fields: Vec<String>,
     id_field: Option<usize>,
     label_field: Option<usize>,
     source_srs: Option<SpatialRef>,
@@ -215,6 +427,8 @@ struct Source<'l> {
     plan: crs::Plan,
     regions: Vec<Region>,
     labels: Vec<String>,
+    /// What the user should know about how the source was read (its CRS).
+    notes: Vec<String>,
 }
 
 impl<'l> Source<'l> {
@@ -231,7 +445,18 @@ impl<'l> Source<'l> {
                 .iter()
                 .find_map(|name| read::field_index(&fields, name)),
         };
-        let source_srs = layer.spatial_ref().map(crs::traditional);
+        let mut notes = Vec::new();
+        let source_srs = match job.source_srs.as_deref() {
+            Some(definition) => {
+                let assigned = crs::parse(session, definition)?;
+                notes.push(format!(
+                    "the source is taken to be in {} (-s_srs)",
+                    crs::describe(&assigned)
+                ));
+                Some(assigned)
+            }
+            None => layer.spatial_ref().map(crs::traditional),
+        };
         let features = read::features(session, layer, job.where_clause.as_deref())?;
         let checked = read::check(&features, id_field, label_field)?;
         let plan = crs::plan(
@@ -242,8 +467,8 @@ impl<'l> Source<'l> {
         )?;
         let regions = read::regions(session, &checked, plan.transform.as_ref())?;
         let labels = checked.into_iter().map(|c| c.label).collect();
+        notes.extend(plan.note.clone());
         Ok(Source {
-            fields,
             id_field,
             label_field,
             source_srs,
@@ -251,16 +476,26 @@ impl<'l> Source<'l> {
             plan,
             regions,
             labels,
+            notes,
         })
     }
 }
 
-/// Writes `text` to a staged copy of `target`.
-fn stage_text(target: Target, text: &str) -> Result<Staged, Error> {
-    let staged = Staged::new(target)?;
-    std::fs::write(staged.path(), text)
-        .map_err(|e| Error::Io(format!("cannot write {:?}: {e}", staged.path().display())))?;
-    Ok(staged)
+/// Writes `text` as the output `what` in its staging folder.
+fn stage_text(
+    what: &'static str,
+    destination: Destination,
+    staging: Staging,
+    text: &str,
+) -> Result<Staged, Error> {
+    std::fs::write(staging.path(), text)
+        .map_err(|e| Error::Io(format!("cannot write {:?}: {e}", staging.path().display())))?;
+    Ok(Staged {
+        what,
+        destination: destination.path,
+        staging,
+        displaced: destination.displaced,
+    })
 }
 
 /// The outputs a job writes, each with what it is called in messages.

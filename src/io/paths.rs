@@ -7,6 +7,9 @@ use gdal::Dataset;
 use std::ffi::CStr;
 use std::path::{Component, Path, PathBuf};
 
+/// The files SQLite keeps beside a database while it is open or after a crash.
+pub(crate) const SQLITE_JOURNALS: [&str; 3] = ["-wal", "-shm", "-journal"];
+
 /// The files of a source dataset, canonical.
 pub(crate) struct SourceFiles {
     files: Vec<PathBuf>,
@@ -29,7 +32,7 @@ impl SourceFiles {
                 Some(archive) => archive,
                 None => PathBuf::from(&name),
             };
-            for suffix in ["", "-wal", "-shm", "-journal"] {
+            for suffix in std::iter::once("").chain(SQLITE_JOURNALS) {
                 let mut with = path.clone().into_os_string();
                 with.push(suffix);
                 files.extend(canonical(Path::new(&with)));
@@ -40,6 +43,15 @@ impl SourceFiles {
         SourceFiles {
             files,
             shown: src.to_owned(),
+        }
+    }
+
+    /// No files at all, for tests of what writes outputs.
+    #[cfg(test)]
+    pub(crate) fn none() -> SourceFiles {
+        SourceFiles {
+            files: Vec::new(),
+            shown: String::new(),
         }
     }
 
@@ -123,7 +135,7 @@ fn archive_of(name: &str) -> Option<PathBuf> {
 }
 
 /// GDALGetFileList: the files the driver says make up the dataset.
-fn file_list(dataset: &Dataset) -> Vec<String> {
+pub(crate) fn file_list(dataset: &Dataset) -> Vec<String> {
     // SAFETY: the dataset handle is valid while `dataset` lives; GDALGetFileList returns a new
     // NULL-terminated list of NUL-terminated strings (or NULL), which is read and then freed
     // with CSLDestroy, as GDAL documents.

@@ -85,6 +85,17 @@ impl Session {
         CAUGHT.with(|caught| caught.borrow().warnings.clone())
     }
 
+    /// How many warnings GDAL has given so far.
+    pub(crate) fn warning_count(&self) -> usize {
+        CAUGHT.with(|caught| caught.borrow().warnings.len())
+    }
+
+    /// Forgets the warnings after the first `kept`: those of a trial that the real run will
+    /// give again, about its own files.
+    pub(crate) fn forget_warnings_after(&self, kept: usize) {
+        CAUGHT.with(|caught| caught.borrow_mut().warnings.truncate(kept));
+    }
+
     /// The last error GDAL reported since the previous call, if any.
     pub(crate) fn take_error(&self) -> Option<String> {
         CAUGHT.with(|caught| caught.borrow_mut().last_error.take())

@@ -1,7 +1,8 @@
 //! A picture of the source map and the grid map side by side (`-svg FILE`), so a user can look
 //! instead of read. Each region has the same colour in both panels, picked from where its
 //! centroid lies on the source map, so a cell far from home stands out; each cell carries the
-//! region's short label. Written by hand: the format is simple and the output deterministic.
+//! region's short label, all in one font size, abbreviated or cut where it would not fit. Written
+//! by hand: the format is simple and the output deterministic; any text is made valid XML 1.0.
 
 use crate::core::geometry::bounds;
 use crate::core::{GridMap, Region};
@@ -15,6 +16,15 @@ const MARGIN: f64 = 12.0;
 const TITLE: f64 = 22.0;
 /// Outline detail finer than this (pixels) is not drawn, which keeps big layers small.
 const DETAIL: f64 = 0.4;
+/// Width of a character as a share of the font size (sans-serif, on average).
+const EM_PER_CHAR: f64 = 0.6;
+/// Share of a cell's side that a label may take.
+const LABEL_SPAN: f64 = 0.9;
+/// Largest label font size, as a share of a cell's side.
+const LABEL_MAX: f64 = 0.4;
+/// The label font is never so small that fewer characters than this fit in a cell; longer
+/// labels are abbreviated instead.
+const LABEL_CHARS: usize = 5;
 
 /// The SVG document. `labels` and `regions` are in input order, as `map.cells` is.
 pub(crate) fn render(regions: &[Region], labels: &[String], map: &GridMap) -> String {
@@ -57,7 +67,7 @@ pub(crate) fn render(regions: &[Region], labels: &[String], map: &GridMap) -> St
             "<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"14\">{}</text>",
             x + PANEL / 2.0,
             MARGIN + TITLE / 2.0,
-            escape(&title)
+            escape(&xml_safe(&title))
         );
     }
 
@@ -77,6 +87,18 @@ pub(crate) fn render(regions: &[Region], labels: &[String], map: &GridMap) -> St
             let _ = writeln!(svg, "<path fill=\"{colour}\" d=\"{}\"/>", path.trim_end());
         }
     }
+    // Every cell has the same side, so one font size serves all: the size at which the longest
+    // label fits, but no smaller than the size for LABEL_CHARS characters.
+    let side = map.cell_size * grid_view.scale;
+    let longest = labels
+        .iter()
+        .map(|l| xml_safe(l).chars().count())
+        .max()
+        .unwrap_or(0)
+        .clamp(2, LABEL_CHARS);
+    let font = (LABEL_MAX * side).min(LABEL_SPAN * side / (EM_PER_CHAR * longest as f64));
+    // At that size `longest` characters fit: every label does, or is made to.
+    let room = longest;
     for ((cell, label), colour) in map.cells.iter().zip(labels).zip(&colours) {
         let Some(rect) = cell.cell.bounding_rect() else {
             continue;
@@ -85,11 +107,7 @@ pub(crate) fn render(regions: &[Region], labels: &[String], map: &GridMap) -> St
             x: rect.min().x,
             y: rect.max().y,
         });
-        let side = rect.width() * grid_view.scale;
         let centre = grid_view.px(rect.center());
-        // About 0.6 em per character: long names shrink to fit their cell.
-        let chars = label.chars().count().max(2) as f64;
-        let font = (0.4 * side).min(1.5 * side / chars);
         let _ = writeln!(
             svg,
             "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{side:.1}\" height=\"{side:.1}\" fill=\"{colour}\"/>\
@@ -98,7 +116,7 @@ pub(crate) fn render(regions: &[Region], labels: &[String], map: &GridMap) -> St
             corner.y,
             centre.x,
             centre.y,
-            escape(label)
+            escape(&fit(&xml_safe(label), room))
         );
     }
     svg.push_str("</svg>\n");
@@ -165,6 +183,37 @@ fn colour(at: Coord<f64>, bounds: &Rect<f64>) -> String {
     format!("hsl({:.0},60%,{:.0}%)", 300.0 * east, 78.0 - 26.0 * south)
 }
 
+/// `label` in at most `room` characters: as it is if it fits, else the initials of its
+/// capitalised words ("United States of America" → "USA"), else cut with an ellipsis.
+fn fit(label: &str, room: usize) -> String {
+    if label.chars().count() <= room {
+        return label.to_owned();
+    }
+    let initials: String = label
+        .split_whitespace()
+        .filter_map(|word| word.chars().next())
+        .filter(|c| c.is_uppercase())
+        .collect();
+    if (2..=room).contains(&initials.chars().count()) {
+        return initials;
+    }
+    let kept: String = label.chars().take(room.saturating_sub(1)).collect();
+    format!("{}…", kept.trim_end())
+}
+
+/// `text` without what XML 1.0 cannot hold even escaped: control characters (a tab or line
+/// break, allowed but out of place in a one-line label, becomes a space) and U+FFFE, U+FFFF.
+fn xml_safe(text: &str) -> String {
+    text.chars()
+        .filter_map(|c| match c {
+            '\t' | '\n' | '\r' => Some(' '),
+            c if c.is_control() || c == '\u{FFFE}' || c == '\u{FFFF}' => None,
+            c => Some(c),
+        })
+        .collect()
+}
+
+/// `text` with XML's markup characters escaped.
 fn escape(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for ch in text.chars() {
@@ -178,4 +227,24 @@ fn escape(text: &str) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_that_do_not_fit_are_abbreviated_or_cut() {
+        assert_eq!(fit("CA", 4), "CA");
+        assert_eq!(fit("United States of America", 4), "USA");
+        assert_eq!(fit("Central African Rep.", 4), "CAR");
+        assert_eq!(fit("Kazakhstan", 5), "Kaza…");
+        assert_eq!(fit("New caledonia", 3), "Ne…");
+    }
+
+    #[test]
+    fn text_is_made_valid_xml() {
+        assert_eq!(xml_safe("a\u{7}b\tc\u{FFFE}\u{9F}"), "ab c");
+        assert_eq!(escape("<&\"'>"), "&lt;&amp;&quot;&apos;&gt;");
+    }
 }

@@ -1,49 +1,49 @@
 //! Writing the grid layer: one square per region, in input order, with every source field (same
-//! name, type, subtype, width and precision), then the cell's column and row and the region's
-//! metrics, and the run's metrics and parameters as layer metadata where the format keeps it.
+//! type, subtype, width and precision; same name unless it collides with a computed field), then
+//! the cell's column and row and the region's metrics, and the run's metrics and parameters as
+//! layer metadata where the format keeps it.
 
 use super::session::Session;
-use crate::core::{Error, GridMap, RegionCell};
+use crate::core::{Error, RegionCell};
+use crate::fields::OUTPUT_FIELDS;
+use gdal::cpl::CslStringList;
 use gdal::spatial_ref::SpatialRef;
 use gdal::vector::{
     Feature, FieldDefn, FieldValue, LayerAccess, LayerOptions, OGRFieldType, OGRwkbGeometryType,
     ToGdal,
 };
-use gdal::{Dataset, Driver, DriverManager, DriverType, Metadata};
-use std::ffi::c_int;
-use std::fs::OpenOptions;
-use std::io::{Seek, SeekFrom, Write};
-use std::path::{Path, PathBuf};
+use gdal::{Dataset, DatasetOptions, Driver, DriverManager, DriverType, GdalOpenFlags, Metadata};
+use geo::Polygon;
+use std::ffi::{c_int, CStr, CString};
+use std::path::Path;
 
-/// The fields added after the source's, all at most 10 characters (the Shapefile limit).
-/// Column of the region's cell, from the left (0 = leftmost used column).
-pub const GRID_COL: &str = "grid_col";
-/// Row of the region's cell, from the top (0 = topmost used row).
-pub const GRID_ROW: &str = "grid_row";
-/// Distance from the region's centroid to its cell, in cells (after the fit of method.md §8).
-pub const CELL_DISP: &str = "cell_disp";
-/// Share of the region's neighbours whose cells are still 8-neighbours.
-pub const NBR_KEPT: &str = "nbr_kept";
-/// Mean direction error towards its neighbours, degrees.
-pub const ORIENT_ERR: &str = "orient_err";
-const ADDED: [(&str, OGRFieldType::Type); 5] = [
-    (GRID_COL, OGRFieldType::OFTInteger),
-    (GRID_ROW, OGRFieldType::OFTInteger),
-    (CELL_DISP, OGRFieldType::OFTReal),
-    (NBR_KEPT, OGRFieldType::OFTReal),
-    (ORIENT_ERR, OGRFieldType::OFTReal),
-];
+/// The fields added after the source's ([`OUTPUT_FIELDS`], the core's table), with the OGR type
+/// each is written as; they always carry the computed values under exactly these names.
+pub(crate) fn computed_fields() -> impl Iterator<Item = (&'static str, OGRFieldType::Type)> {
+    OUTPUT_FIELDS.iter().map(|f| {
+        let kind = if f.integer {
+            OGRFieldType::OFTInteger
+        } else {
+            OGRFieldType::OFTReal
+        };
+        (f.name, kind)
+    })
+}
 
-/// The values of the [`ADDED`] fields for one cell, in the same order.
-fn computed(cell: &RegionCell) -> [FieldValue; 5] {
-    let m = &cell.metrics;
-    [
-        FieldValue::IntegerValue(cell.col),
-        FieldValue::IntegerValue(cell.row),
-        FieldValue::RealValue(m.displacement),
-        FieldValue::RealValue(m.neighbours_kept),
-        FieldValue::RealValue(m.orientation_error),
-    ]
+/// The values of the [`computed_fields`] for one cell, in the same order.
+pub(crate) fn computed(cell: &RegionCell) -> Vec<FieldValue> {
+    OUTPUT_FIELDS
+        .iter()
+        .map(|f| {
+            let value = f.value(cell);
+            if f.integer {
+                // Columns and rows are i32 in the core.
+                FieldValue::IntegerValue(value as i32)
+            } else {
+                FieldValue::RealValue(value)
+            }
+        })
+        .collect()
 }
 
 /// The driver for `-f`, else the one the destination's extension names, else GeoPackage; it must
@@ -77,54 +77,111 @@ pub(crate) fn driver(format: Option<&str>, dst: &str) -> Result<Driver, Error> {
             driver.short_name()
         )));
     }
+    // Every driver that writes files does so through GDAL's virtual file layer; the others keep
+    // the data in memory (Memory) or send it to a service, and would leave nothing at DST.
+    if !says("DCAP_VIRTUALIO") {
+        return Err(Error::Io(format!(
+            "format {:?} does not write files (it keeps the layer in memory or sends it to a \
+             service), so nothing would be left at {dst:?}; choose a file format (e.g. GPKG)",
+            driver.short_name()
+        )));
+    }
     Ok(driver)
 }
 
-/// What the written layer is, besides the cells.
-pub(crate) struct LayerSpec<'a> {
-    pub name: &'a str,
-    /// The names of the source layer's fields, which every feature of `sources` has.
-    pub source_fields: &'a [String],
-    pub srs: Option<&'a SpatialRef>,
-    /// Layer metadata items (key, value).
-    pub metadata: &'a [(String, String)],
-    /// One line for formats with a layer description (GeoPackage's gpkg_contents).
-    pub description: &'a str,
+/// A source field as the output writes it.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct OutputField {
+    /// Its index in the source layer.
+    pub source: usize,
+    /// The name asked of the driver: the source's, or `src_<name>` when that collides with a
+    /// computed field (see [`super::probe`]).
+    pub name: String,
 }
 
-/// The name of the layer written and notes (source fields replaced by the computed ones).
+/// How the grid layer is made, the same in the probe and in the staged output.
+pub(crate) struct LayerSpec<'a> {
+    pub name: &'a str,
+    pub srs: Option<&'a SpatialRef>,
+    /// Layer creation options, NAME=VALUE (see [`super::options::layer_options`]).
+    pub options: &'a [String],
+    /// The source fields written, in order; the computed fields follow.
+    pub fields: &'a [OutputField],
+    /// Layer metadata items (key, value).
+    pub metadata: &'a [(String, String)],
+}
+
+/// One feature of the grid layer.
+pub(crate) struct Row<'a> {
+    /// The region's id, for messages.
+    pub id: &'a str,
+    /// The source feature whose attributes it carries.
+    pub source: &'a Feature<'a>,
+    pub cell: &'a Polygon<f64>,
+    /// The values of the [`computed_fields`].
+    pub computed: Vec<FieldValue>,
+}
+
+/// The dataset the grid layer is written into.
+pub(crate) enum Container<'a> {
+    /// A new dataset made by `driver` with these dataset creation options.
+    New {
+        driver: &'a Driver,
+        options: &'a [String],
+    },
+    /// The dataset already at the path (a staged copy of the destination), opened for update;
+    /// its layer named `replace`, if any, is deleted first.
+    Existing { replace: Option<&'a str> },
+}
+
+/// What was written.
 pub(crate) struct Written {
+    /// The layer's name, as the driver gave it (a Shapefile's layer is its file name).
     pub layer: String,
+    /// Every field of the layer as the driver named it, in order.
+    pub fields: Vec<String>,
+    /// GDAL's warnings while writing.
     pub notes: Vec<String>,
 }
 
-/// Writes the grid layer to a new dataset at `path`: `sources[k]` gives the attributes of
-/// `map.cells[k]`. `progress` gets the fraction written and returns false to cancel.
+/// Writes the grid layer, one feature per row, into the dataset at `path`. `progress` gets the
+/// fraction written and returns false to cancel.
 pub(crate) fn write(
     session: &Session,
     path: &Path,
-    driver: &Driver,
+    container: &Container,
     spec: &LayerSpec,
-    sources: &[Feature],
-    map: &GridMap,
+    rows: &[Row],
     progress: &dyn Fn(f64) -> bool,
 ) -> Result<Written, Error> {
     let fail = |what: &str, e| session.io_error(&format!("cannot {what} {:?}", path.display()), e);
-    let mut dataset = driver
-        .create_vector_only(path)
-        .map_err(|e| fail("create", e))?;
+    let mut dataset = match container {
+        Container::New { driver, options } => {
+            create_vector(driver, path, options).map_err(|e| fail("create", e))?
+        }
+        Container::Existing { replace } => {
+            let options = DatasetOptions {
+                open_flags: GdalOpenFlags::GDAL_OF_VECTOR | GdalOpenFlags::GDAL_OF_UPDATE,
+                ..Default::default()
+            };
+            let mut dataset = Dataset::open_ex(path, options).map_err(|e| fail("update", e))?;
+            let old = replace.and_then(|name| {
+                dataset
+                    .layers()
+                    .position(|layer| layer.name().eq_ignore_ascii_case(name))
+            });
+            if let Some(index) = old {
+                dataset
+                    .delete_layer(index)
+                    .map_err(|e| fail(&format!("replace layer {:?} of", spec.name), e))?;
+            }
+            dataset
+        }
+    };
     // One transaction where the format has them: much faster for GeoPackage, all or nothing.
     let in_transaction = match dataset.start_transaction() {
         Ok(mut transaction) => {
-            let written = fill(
-                session,
-                &mut transaction,
-                driver,
-                spec,
-                sources,
-                map,
-                progress,
-            )?;
+            let written = fill(session, &mut transaction, spec, rows, progress)?;
             transaction.commit().map_err(|e| fail("write", e))?;
             Some(written)
         }
@@ -132,51 +189,65 @@ pub(crate) fn write(
     };
     let written = match in_transaction {
         Some(written) => written,
-        None => fill(session, &mut dataset, driver, spec, sources, map, progress)?,
+        None => fill(session, &mut dataset, spec, rows, progress)?,
     };
     // Closing flushes; a failure here (disk full) must fail the run.
     dataset.close().map_err(|e| fail("write", e))?;
-    if driver.short_name() == "ESRI Shapefile" {
-        fix_dbf_dates(path)?;
+    Ok(Written {
+        notes: session.warnings(),
+        ..written
+    })
+}
+
+/// A new vector dataset with dataset creation options: the binding makes one either without
+/// options, or with options and a raster band type (which some drivers refuse: OpenFileGDB,
+/// MVT).
+fn create_vector(
+    driver: &Driver,
+    path: &Path,
+    options: &[String],
+) -> gdal::errors::Result<Dataset> {
+    let mut list = CslStringList::new();
+    for option in options {
+        list.add_string(option)?;
     }
-    Ok(written)
+    let name = CString::new(path.to_string_lossy().as_bytes())?;
+    // SAFETY: the driver handle is valid while `driver` lives; the name and the option list are
+    // NUL-terminated and outlive the call, which copies what it keeps. A non-null result is a
+    // new dataset that nothing else owns, so the binding may own and close it.
+    let dataset = unsafe {
+        gdal_sys::GDALCreate(
+            driver.c_driver(),
+            name.as_ptr(),
+            0,
+            0,
+            0,
+            gdal_sys::GDALDataType::GDT_Unknown,
+            list.as_ptr(),
+        )
+    };
+    if dataset.is_null() {
+        return Err(gdal::errors::GdalError::NullPointer {
+            method_name: "GDALCreate",
+            msg: String::new(),
+        });
+    }
+    // SAFETY: see above.
+    Ok(unsafe { Dataset::from_c_dataset(dataset) })
 }
 
 fn fill(
     session: &Session,
     dataset: &mut Dataset,
-    driver: &Driver,
     spec: &LayerSpec,
-    sources: &[Feature],
-    map: &GridMap,
+    rows: &[Row],
     progress: &dyn Fn(f64) -> bool,
 ) -> Result<Written, Error> {
     let fail = |what: &str, e| session.io_error(what, e);
-    let source_fields = spec.source_fields;
-    let replaced = |name: &str| {
-        ADDED
-            .iter()
-            .any(|(added, _)| added.eq_ignore_ascii_case(name))
-    };
-    let mut notes: Vec<String> = source_fields
-        .iter()
-        .filter(|name| replaced(name))
-        .map(|name| format!("the source field {name:?} was replaced by the computed value"))
-        .collect();
-
-    let taken: Vec<&str> = source_fields
-        .iter()
-        .map(String::as_str)
-        .chain(ADDED.iter().map(|(name, _)| *name))
-        .collect();
-    let mut options: Vec<String> = ["FID", "GEOMETRY_NAME"]
-        .into_iter()
-        .filter_map(|option| column_option(driver, option, &taken))
-        .collect();
-    if creation_option(driver, "DESCRIPTION").is_some() {
-        options.push(format!("DESCRIPTION={}", spec.description));
-    }
-    let option_refs: Vec<&str> = options.iter().map(String::as_str).collect();
+    let first = rows
+        .first()
+        .ok_or_else(|| Error::Internal("a grid layer without features".into()))?;
+    let option_refs: Vec<&str> = spec.options.iter().map(String::as_str).collect();
     let mut layer = dataset
         .create_layer(LayerOptions {
             name: spec.name,
@@ -185,34 +256,35 @@ fn fill(
             options: Some(&option_refs),
         })
         .map_err(|e| fail(&format!("cannot create layer {:?}", spec.name), e))?;
+    // Spreadsheets (XLSX, ODS) make a layer without geometry, where every cell would be lost.
+    if layer.defn().geom_fields().count() == 0 {
+        return Err(Error::Io(format!(
+            "format {:?} cannot store geometries, so the cells would be lost; write e.g. \
+             GeoPackage, Shapefile, GeoJSON, FlatGeobuf, or CSV (which holds them as WKT)",
+            dataset.driver().short_name()
+        )));
+    }
 
-    // Source field k goes to output field map[k] (−1: replaced by a computed field).
-    let mut field_map: Vec<c_int> = Vec::with_capacity(source_fields.len());
-    let mut next: c_int = 0;
-    if let Some(first) = sources.first() {
-        for (k, name) in source_fields.iter().enumerate() {
-            if replaced(name) {
-                field_map.push(-1);
-                continue;
-            }
-            copy_field_definition(&layer, first, k)
-                .map_err(|e| fail(&format!("cannot create field {name:?}"), e))?;
-            field_map.push(next);
-            next += 1;
+    // Source field k goes to output field field_map[k] (−1: not written).
+    let mut field_map: Vec<c_int> = vec![-1; first.source.field_count()];
+    for (position, field) in spec.fields.iter().enumerate() {
+        create_field(&layer, first.source, field)
+            .map_err(|e| fail(&format!("cannot create field {:?}", field.name), e))?;
+        if let Some(slot) = field_map.get_mut(field.source) {
+            *slot = c_int::try_from(position)
+                .map_err(|_| Error::Io("too many fields for the output".into()))?;
         }
     }
-    let mut added = Vec::with_capacity(ADDED.len());
-    for (name, kind) in ADDED {
+    for (name, kind) in computed_fields() {
         FieldDefn::new(name, kind)
             .and_then(|d| d.add_to_layer(&layer))
             .map_err(|e| fail(&format!("cannot create field {name:?}"), e))?;
-        added.push(next as usize);
-        next += 1;
     }
-    if layer.defn().fields().count() != next as usize {
+    let fields: Vec<String> = layer.defn().fields().map(|f| f.name()).collect();
+    if fields.len() != spec.fields.len() + OUTPUT_FIELDS.len() {
         return Err(Error::Io(format!(
             "the {} driver did not create every field",
-            driver.short_name()
+            dataset.driver().short_name()
         )));
     }
     for (key, value) in spec.metadata {
@@ -221,55 +293,96 @@ fn fill(
             .map_err(|e| fail(&format!("cannot set layer metadata {key}"), e))?;
     }
 
-    let total = map.cells.len().max(1) as f64;
-    for (k, (cell, source)) in map.cells.iter().zip(sources).enumerate() {
+    let total = rows.len() as f64;
+    for (k, row) in rows.iter().enumerate() {
         let mut feature =
             Feature::new(layer.defn()).map_err(|e| fail("cannot make a feature", e))?;
-        copy_field_values(&mut feature, source, &field_map)
-            .map_err(|e| fail(&format!("cannot copy the attributes of {:?}", cell.id), e))?;
-        let square = cell
+        copy_field_values(&mut feature, row.source, &field_map)
+            .map_err(|e| fail(&format!("cannot copy the attributes of {:?}", row.id), e))?;
+        let square = row
             .cell
             .to_gdal()
             .map_err(|e| fail("cannot make a cell", e))?;
         feature
             .set_geometry(square)
             .and_then(|_| {
-                added
+                row.computed
                     .iter()
-                    .zip(computed(cell))
-                    .try_for_each(|(&index, value)| feature.set_field(index, &value))
+                    .enumerate()
+                    .try_for_each(|(j, value)| feature.set_field(spec.fields.len() + j, value))
             })
             .and_then(|_| feature.create(&layer))
-            .map_err(|e| fail(&format!("cannot write the cell of {:?}", cell.id), e))?;
+            .map_err(|e| fail(&format!("cannot write the cell of {:?}", row.id), e))?;
         if !progress((k + 1) as f64 / total) {
             return Err(Error::Cancelled);
         }
     }
-    notes.extend(session.warnings());
     Ok(Written {
         layer: layer.name(),
-        notes,
+        fields,
+        notes: Vec::new(),
     })
 }
 
-/// Creates on `layer` a field defined exactly as field `index` of `source`: the safe API can only
-/// make a field from a name and a basic type, which would lose subtypes (boolean, int16,
-/// float32, JSON, UUID), widths, precisions, defaults and nullability.
-fn copy_field_definition<L: LayerAccess>(
+/// Creates `field` on `layer`: the source's definition as it is, or a copy of it under the new
+/// name.
+fn create_field<L: LayerAccess>(
     layer: &L,
     source: &Feature,
-    index: usize,
+    field: &OutputField,
 ) -> gdal::errors::Result<()> {
-    let index = c_int::try_from(index)?;
+    let index = c_int::try_from(field.source)?;
+    if index >= c_int::try_from(source.field_count())? {
+        return Err(gdal::errors::GdalError::BadArgument(format!(
+            "the source has no field {index}"
+        )));
+    }
+    let name = CString::new(field.name.as_str())?;
     // SAFETY: `source` is a live feature, which holds a reference to its definition, so the
-    // definition and its field `index` (< the source's field count) are valid during the call;
-    // OGR_L_CreateField copies the field definition it is given and keeps no pointer to it.
+    // definition and its field `index` (checked against the field count above) are valid during
+    // the call. A renamed copy is made with OGR_Fld_Create, given every property the source
+    // field has, passed to OGR_L_CreateField (which copies the definition it is given and keeps
+    // no pointer to it) and destroyed here.
     let result = unsafe {
         let definition = gdal_sys::OGR_F_GetDefnRef(source.c_feature());
-        let field = gdal_sys::OGR_FD_GetFieldDefn(definition, index);
-        gdal_sys::OGR_L_CreateField(layer.c_layer(), field, 1)
+        let original = gdal_sys::OGR_FD_GetFieldDefn(definition, index);
+        let same_name = CStr::from_ptr(gdal_sys::OGR_Fld_GetNameRef(original)) == name.as_c_str();
+        if same_name {
+            gdal_sys::OGR_L_CreateField(layer.c_layer(), original, 1)
+        } else {
+            let copy = renamed_copy(original, &name);
+            let result = gdal_sys::OGR_L_CreateField(layer.c_layer(), copy, 1);
+            gdal_sys::OGR_Fld_Destroy(copy);
+            result
+        }
     };
     ogr_result(result, "OGR_L_CreateField")
+}
+
+/// A new field definition named `name` with every property of `original`; the caller destroys
+/// it.
+///
+/// # Safety
+/// `original` must be a valid field definition for the duration of the call.
+unsafe fn renamed_copy(original: gdal_sys::OGRFieldDefnH, name: &CStr) -> gdal_sys::OGRFieldDefnH {
+    // SAFETY: `original` is valid (the caller's contract); the strings it hands out are copied
+    // by the setters before this function returns.
+    unsafe {
+        let copy = gdal_sys::OGR_Fld_Create(name.as_ptr(), gdal_sys::OGR_Fld_GetType(original));
+        gdal_sys::OGR_Fld_SetSubType(copy, gdal_sys::OGR_Fld_GetSubType(original));
+        gdal_sys::OGR_Fld_SetWidth(copy, gdal_sys::OGR_Fld_GetWidth(original));
+        gdal_sys::OGR_Fld_SetPrecision(copy, gdal_sys::OGR_Fld_GetPrecision(original));
+        gdal_sys::OGR_Fld_SetJustify(copy, gdal_sys::OGR_Fld_GetJustify(original));
+        gdal_sys::OGR_Fld_SetNullable(copy, gdal_sys::OGR_Fld_IsNullable(original));
+        gdal_sys::OGR_Fld_SetUnique(copy, gdal_sys::OGR_Fld_IsUnique(original));
+        gdal_sys::OGR_Fld_SetDefault(copy, gdal_sys::OGR_Fld_GetDefault(original));
+        gdal_sys::OGR_Fld_SetDomainName(copy, gdal_sys::OGR_Fld_GetDomainName(original));
+        gdal_sys::OGR_Fld_SetAlternativeName(
+            copy,
+            gdal_sys::OGR_Fld_GetAlternativeNameRef(original),
+        );
+        copy
+    }
 }
 
 /// Copies every attribute of `source` into `target` as `map` says: the safe API reads and writes
@@ -305,71 +418,4 @@ fn ogr_result(
             method_name,
         })
     }
-}
-
-/// The `<Option .../>` element of layer creation option `name` in the driver's list.
-fn creation_option(driver: &Driver, name: &str) -> Option<String> {
-    let list = driver
-        .metadata_item("DS_LAYER_CREATIONOPTIONLIST", "")?
-        .replace('\'', "\"");
-    let start = list.find(&format!("<Option name=\"{name}\""))?;
-    let end = list[start..].find('>')? + start;
-    Some(list[start..=end].to_owned())
-}
-
-/// `OPTION=name` for a column the driver creates itself (FID, geometry) when its default name
-/// would clash with a field: e.g. a source field `fid` written to GeoPackage would otherwise be
-/// taken as the FID column. `None` (keep the driver's default) when there is no clash.
-fn column_option(driver: &Driver, option: &str, taken: &[&str]) -> Option<String> {
-    let element = creation_option(driver, option)?;
-    let default = element
-        .split("default=\"")
-        .nth(1)
-        .and_then(|rest| rest.split('"').next())
-        .filter(|d| !d.is_empty())?;
-    let clashes = |name: &str| taken.iter().any(|t| t.eq_ignore_ascii_case(name));
-    if !clashes(default) {
-        return None;
-    }
-    let free = (1..)
-        .map(|n| format!("{default}_{n}"))
-        .find(|name| !clashes(name))?;
-    Some(format!("{option}={free}"))
-}
-
-/// [`FIXED_DATE`](super::session::FIXED_DATE) (2000-01-01) as a DBF header stores it.
-const DBF_DATE: [u8; 3] = [100, 1, 1];
-
-/// A DBF header stores the date it was written (bytes 1–3: years since 1900, month, day), the
-/// one thing that would make two Shapefiles of the same run differ from one day to the next. It
-/// gets the same fixed date as every other format.
-/// `path` is the staged output: a .shp file (sidecars beside it) or a folder of Shapefiles.
-fn fix_dbf_dates(path: &Path) -> Result<(), Error> {
-    let folder = if path.is_dir() {
-        path.to_path_buf()
-    } else {
-        path.parent()
-            .map(Path::to_path_buf)
-            .unwrap_or_else(|| PathBuf::from("."))
-    };
-    let listing = std::fs::read_dir(&folder)
-        .map_err(|e| Error::Io(format!("cannot list {:?}: {e}", folder.display())))?;
-    for entry in listing.flatten() {
-        let file = entry.path();
-        if !file
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("dbf"))
-        {
-            continue;
-        }
-        OpenOptions::new()
-            .write(true)
-            .open(&file)
-            .and_then(|mut f| {
-                f.seek(SeekFrom::Start(1))?;
-                f.write_all(&DBF_DATE)
-            })
-            .map_err(|e| Error::Io(format!("cannot write {:?}: {e}", file.display())))?;
-    }
-    Ok(())
 }

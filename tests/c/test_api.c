@@ -144,6 +144,7 @@ static void test_null_arguments(void) {
     CHECK_FAILS(snakegrid_job_set(NULL, "src", "x"), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_job_set(job, NULL, "x"), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_job_set_overwrite(NULL, true), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_job_set_update(NULL, true), SNAKEGRID_NULL_ARGUMENT);
 
     snakegrid_result *result = (snakegrid_result *)&byte; /* must stay untouched */
     CHECK_FAILS(snakegrid_run(NULL, options, NULL, NULL, &result), SNAKEGRID_NULL_ARGUMENT);

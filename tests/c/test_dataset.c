@@ -1,11 +1,14 @@
 /* The dataset entry point on a real layer, and the in-memory entry point on the same regions
- * read through GDAL's own C API: both must give the same cells.
+ * read through GDAL's own C API: both must give the same cells. Then what the job settings of
+ * the command line's -update, -s_srs, -lco, -dsco and -f do, and that a refused or cancelled
+ * run leaves an existing destination byte for byte as it was.
  *
  * usage: test_dataset SOURCE.gpkg OUTPUT_DIR   (e.g. shared/data/us_states.gpkg, a fresh dir)
  */
 #define _POSIX_C_SOURCE 200809L /* pthreads, unlink and access under -std=c99 */
 #include <gdal.h>
 #include <ogr_api.h>
+#include <ogr_srs_api.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -33,6 +36,15 @@ static unsigned char *file_bytes(const char *path, long *size) {
     }
     fclose(file);
     return bytes;
+}
+
+/* Whether the file at `path` holds exactly `size` bytes equal to `bytes`. */
+static int same_bytes(const char *path, const unsigned char *bytes, long size) {
+    long now_size = 0;
+    unsigned char *now = file_bytes(path, &now_size);
+    int same = now != NULL && bytes != NULL && now_size == size && memcmp(now, bytes, (size_t)size) == 0;
+    free(now);
+    return same;
 }
 
 static snakegrid_job *make_job(const char *src, const char *dst) {
@@ -152,6 +164,78 @@ int main(int argc, char **argv) {
     snakegrid_result_free(from_memory);
     snakegrid_regions_free(regions);
     snakegrid_result_free(from_dataset);
+
+    /* Formats that would leave nothing at the destination, or lose the cells, are refused. */
+    const char *refused[][3] = {{"Memory", "grid.mem", "\"Memory\" does not write files"},
+                                {"XLSX", "grid.xlsx", "\"XLSX\" cannot store geometries"}};
+    for (size_t k = 0; k < sizeof refused / sizeof refused[0]; k++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", argv[2], refused[k][1]);
+        snakegrid_job *format_job = make_job(src, path);
+        snakegrid_result *nothing = NULL;
+        CHECK_OK(snakegrid_job_set(format_job, "format", refused[k][0]));
+        CHECK_FAILS(snakegrid_run_job(format_job, options, NULL, NULL, &nothing), SNAKEGRID_IO_ERROR);
+        CHECK_MESSAGE_HAS(refused[k][2]);
+        CHECK(nothing == NULL && access(path, F_OK) != 0);
+        snakegrid_job_free(format_job);
+    }
+
+    /* -lco, -dsco, -s_srs and -update: a second layer in the destination GeoPackage. */
+    long grid_size = 0;
+    unsigned char *grid_bytes = file_bytes(dst, &grid_size);
+    snakegrid_job *more = make_job(src, dst);
+    snakegrid_result *added = NULL;
+    CHECK_FAILS(snakegrid_job_set(more, "lco", "NOEQUALS"), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("lco \"NOEQUALS\": a creation option is written NAME=VALUE");
+    CHECK_OK(snakegrid_job_set(more, "lco", "FID=cell_id"));
+    CHECK_OK(snakegrid_job_set(more, "lco", "SPATIAL_INDEX=NO"));
+    CHECK_OK(snakegrid_job_set(more, "dsco", "VERSION=1.2"));
+    CHECK_OK(snakegrid_job_set(more, "s_srs", "EPSG:3857"));
+    CHECK_OK(snakegrid_job_set(more, "layer_name", "more"));
+    CHECK_FAILS(snakegrid_run_job(more, options, NULL, NULL, &added), SNAKEGRID_IO_ERROR);
+    CHECK_MESSAGE_HAS("already exists");
+    CHECK(added == NULL && same_bytes(dst, grid_bytes, grid_size));
+    CHECK_OK(snakegrid_job_set_update(more, true));
+    CHECK_OK(snakegrid_run_job(more, options, NULL, NULL, &added));
+    snakegrid_result_free(added);
+    added = NULL;
+    GDALDatasetH written = GDALOpenEx(dst, GDAL_OF_VECTOR | GDAL_OF_READONLY, NULL, NULL, NULL);
+    CHECK(written != NULL);
+    if (written != NULL) {
+        CHECK(GDALDatasetGetLayerCount(written) == 2);
+        OGRLayerH kept = GDALDatasetGetLayerByName(written, "us_states");
+        OGRLayerH layer = GDALDatasetGetLayerByName(written, "more");
+        CHECK(kept != NULL && OGR_L_GetFeatureCount(kept, 1) == 49);
+        CHECK(layer != NULL && strcmp(OGR_L_GetFIDColumn(layer), "cell_id") == 0);
+        OGRSpatialReferenceH srs = layer != NULL ? OGR_L_GetSpatialRef(layer) : NULL;
+        const char *code = srs != NULL ? OSRGetAuthorityCode(srs, NULL) : NULL;
+        CHECK(code != NULL && strcmp(code, "3857") == 0);
+        GDALClose(written);
+    }
+    /* The layer now exists: -update alone refuses it, leaving the file as it was. */
+    free(grid_bytes);
+    grid_bytes = file_bytes(dst, &grid_size);
+    CHECK_FAILS(snakegrid_run_job(more, options, NULL, NULL, &added), SNAKEGRID_IO_ERROR);
+    CHECK_MESSAGE_HAS("already has a layer \"more\"");
+    CHECK(added == NULL && same_bytes(dst, grid_bytes, grid_size));
+    /* With overwrite a cancelled run leaves it as it was too; a full one replaces the layer. */
+    CHECK_OK(snakegrid_job_set_overwrite(more, true));
+    calls = 0;
+    CHECK_FAILS(snakegrid_run_job(more, options, cancel_at_once, &calls, &added), SNAKEGRID_CANCELLED);
+    CHECK(added == NULL && same_bytes(dst, grid_bytes, grid_size));
+    CHECK_OK(snakegrid_job_set(more, "lco", NULL));
+    CHECK_OK(snakegrid_run_job(more, options, NULL, NULL, &added));
+    snakegrid_result_free(added);
+    written = GDALOpenEx(dst, GDAL_OF_VECTOR | GDAL_OF_READONLY, NULL, NULL, NULL);
+    CHECK(written != NULL);
+    if (written != NULL) {
+        OGRLayerH layer = GDALDatasetGetLayerByName(written, "more");
+        CHECK(GDALDatasetGetLayerCount(written) == 2);
+        CHECK(layer != NULL && strcmp(OGR_L_GetFIDColumn(layer), "fid") == 0);
+        GDALClose(written);
+    }
+    free(grid_bytes);
+    snakegrid_job_free(more);
 
     /* No setting may write over the source: refused before any work, the source unchanged. */
     snakegrid_result *none = NULL;

@@ -1,0 +1,269 @@
+//! What the output driver makes of the grid layer, found out before the run reads a feature: the
+//! layer is written once in memory (`/vsimem/`) by the same driver with the same options and
+//! fields, and read back. Whatever the format, this tells
+//! - whether it keeps the cells at all (XLSX and ODS store no geometry; CSV stores it as WKT,
+//!   which snakegrid asks for), and whether the creation options are acceptable;
+//! - the names the driver gives the fields (a DBF cuts them to 10 characters, SQLite launders
+//!   them), so that a source field that would take a computed field's name is written as
+//!   `src_<name>` instead and the computed values keep their documented names;
+//! - whether the driver can add a layer to a file it wrote, and delete one (GeoPackage can, KML
+//!   cannot), which decides what `-update` and `-overwrite` may do with an existing file.
+//!
+//! Once the features are read, their ids are written the same way and read back, so that ids
+//! the output would merge or change (a DBF drops trailing spaces, keeps at most 254 bytes and
+//! recodes to its encoding) are refused before the layout.
+
+use super::readback::{can_read, read_back, Expected};
+use super::session::Session;
+use super::write::{self, computed_fields, Container, LayerSpec, OutputField, Row};
+use crate::core::Error;
+use crate::fields::OUTPUT_FIELDS;
+use gdal::vector::{Defn, Feature, FieldValue, OGRFieldType};
+use gdal::{Dataset, DatasetCapability, DatasetOptions, Driver, GdalOpenFlags};
+use geo::{polygon, Polygon};
+use std::ffi::{CString, OsStr};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// The driver and options the output is written with.
+pub(crate) struct Trial<'a> {
+    pub session: &'a Session,
+    pub driver: &'a Driver,
+    pub dataset_options: &'a [String],
+    pub layer_options: &'a [String],
+    pub layer: &'a str,
+    /// The destination's file name, so that the driver decides as it will for the real one
+    /// (a `.shp` file, or a folder of Shapefiles).
+    pub file_name: &'a OsStr,
+}
+
+/// The fields of the grid layer, as the probe found the driver names them.
+pub(crate) struct Fields {
+    /// The source fields, in order, as they are written.
+    pub fields: Vec<OutputField>,
+    /// Every field of the layer as the driver names it: the source fields, then the computed.
+    pub stored: Vec<String>,
+    /// The source fields written under another name, and why.
+    pub notes: Vec<String>,
+    /// The driver can add a layer to a file it wrote and delete one from it.
+    pub layers_in_place: bool,
+}
+
+impl Trial<'_> {
+    /// Makes the grid layer in memory with one blank feature of the `source` layer, renaming
+    /// source fields until every computed field keeps its name.
+    pub(crate) fn fields(&self, source: &Defn) -> Result<Fields, Error> {
+        let names: Vec<String> = source.fields().map(|f| f.name()).collect();
+        let computed = |name: &str| computed_fields().any(|(c, _)| c.eq_ignore_ascii_case(name));
+        let mut fields: Vec<OutputField> = names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| OutputField {
+                source: k,
+                name: if computed(name) {
+                    format!("src_{name}")
+                } else {
+                    name.clone()
+                },
+            })
+            .collect();
+        // Null (not unset) values, which even formats without a schema (GeoJSON) write, so that
+        // every field reads back.
+        let mut blank =
+            Feature::new(source).map_err(|e| self.session.io_error("cannot make a feature", e))?;
+        for k in 0..names.len() {
+            blank
+                .set_field_null(k)
+                .map_err(|e| self.session.io_error("cannot make a feature", e))?;
+        }
+        // Each pass renames at least one more source field, so there are at most as many passes
+        // as computed fields, plus the one that finds nothing more to rename.
+        for _ in 0..=OUTPUT_FIELDS.len() {
+            let (stored, layers_in_place) = self.try_layer(&fields, &[("", &blank)], None)?;
+            let (kept, added) = stored.split_at(fields.len());
+            let clash = computed_fields()
+                .zip(added)
+                .find(|((name, _), got)| got.as_str() != *name)
+                .map(|((name, _), _)| name);
+            let Some(clash) = clash else {
+                let notes = fields
+                    .iter()
+                    .zip(kept)
+                    .filter(|(field, _)| field.name != names[field.source])
+                    .map(|(field, as_stored)| {
+                        format!(
+                            "the source field {:?} is written as {as_stored:?}: the {} output \
+                             would otherwise give it the name of the computed field",
+                            names[field.source],
+                            self.driver.short_name()
+                        )
+                    })
+                    .collect();
+                return Ok(Fields {
+                    fields,
+                    stored,
+                    notes,
+                    layers_in_place,
+                });
+            };
+            // The source field that took the computed field's name, once the driver named it.
+            let taker = kept
+                .iter()
+                .position(|k| k.eq_ignore_ascii_case(clash))
+                .filter(|&k| fields[k].name == names[fields[k].source]);
+            match taker {
+                Some(k) => fields[k].name = format!("src_{}", names[fields[k].source]),
+                None => {
+                    return Err(Error::Io(format!(
+                        "the {} driver does not keep the name of the computed field {clash:?}",
+                        self.driver.short_name()
+                    )))
+                }
+            }
+        }
+        Err(Error::Io(format!(
+            "the {} driver keeps renaming the computed fields",
+            self.driver.short_name()
+        )))
+    }
+
+    /// Writes every `feature` of the source under its id (the field at `id_position` of
+    /// `fields.stored`) in memory and reads it back, refusing the first id the output would
+    /// change.
+    pub(crate) fn ids(
+        &self,
+        fields: &Fields,
+        features: &[(&str, &Feature)],
+        id_position: usize,
+    ) -> Result<(), Error> {
+        self.try_layer(&fields.fields, features, Some(id_position))
+            .map(|_| ())
+    }
+
+    /// Writes the layer with `fields` and `features` into a fresh folder of `/vsimem/`, reads it
+    /// back (the ids too when `id_position` is given), and returns the names the driver gave
+    /// every field and whether it can add and delete layers in the file it wrote.
+    fn try_layer(
+        &self,
+        fields: &[OutputField],
+        features: &[(&str, &Feature)],
+        id_position: Option<usize>,
+    ) -> Result<(Vec<String>, bool), Error> {
+        // GDAL's warnings about the trial (unknown options, values cut) come again, about the
+        // real output, when the run writes it.
+        let warnings = self.session.warning_count();
+        let folder = MemFolder::new();
+        let result = self.try_layer_in(&folder, fields, features, id_position);
+        self.session.forget_warnings_after(warnings);
+        // Messages name the destination, not the in-memory file that stood in for it.
+        let shown = folder.0.join(self.file_name).display().to_string();
+        let tried = format!("{} (tried in memory)", self.file_name.to_string_lossy());
+        result.map_err(|error| match error {
+            Error::Io(message) => Error::Io(message.replace(&shown, &tried)),
+            Error::InvalidInput { feature, message } => Error::InvalidInput {
+                feature,
+                message: message.replace(&shown, &tried),
+            },
+            other => other,
+        })
+    }
+
+    fn try_layer_in(
+        &self,
+        folder: &MemFolder,
+        fields: &[OutputField],
+        features: &[(&str, &Feature)],
+        id_position: Option<usize>,
+    ) -> Result<(Vec<String>, bool), Error> {
+        let path = folder.0.join(self.file_name);
+        let square: Polygon<f64> =
+            polygon![(x: 0.0, y: 0.0), (x: 1.0, y: 0.0), (x: 1.0, y: 1.0), (x: 0.0, y: 1.0)];
+        let rows: Vec<Row> = features
+            .iter()
+            .map(|&(id, source)| Row {
+                id,
+                source,
+                cell: &square,
+                computed: computed_fields()
+                    .map(|(_, kind)| match kind {
+                        OGRFieldType::OFTInteger => FieldValue::IntegerValue(0),
+                        _ => FieldValue::RealValue(0.0),
+                    })
+                    .collect(),
+            })
+            .collect();
+        let spec = LayerSpec {
+            name: self.layer,
+            srs: None,
+            options: self.layer_options,
+            fields,
+            metadata: &[],
+        };
+        let container = Container::New {
+            driver: self.driver,
+            options: self.dataset_options,
+        };
+        let written = write::write(self.session, &path, &container, &spec, &rows, &|_| true)?;
+        let ids: Vec<&str> = features.iter().map(|(id, _)| *id).collect();
+        let expected = Expected {
+            driver: &self.driver.short_name(),
+            layer: &written.layer,
+            fields: &written.fields,
+            ids: id_position.map(|position| (position, ids.as_slice())),
+            features: rows.len(),
+        };
+        if can_read(self.driver) {
+            read_back(self.session, &path, &expected)?;
+        }
+        Ok((written.fields, layers_in_place(&path)))
+    }
+}
+
+/// Whether the dataset at `path`, opened for update, can take another layer and lose one.
+fn layers_in_place(path: &Path) -> bool {
+    let options = DatasetOptions {
+        open_flags: GdalOpenFlags::GDAL_OF_VECTOR | GdalOpenFlags::GDAL_OF_UPDATE,
+        ..Default::default()
+    };
+    Dataset::open_ex(path, options).is_ok_and(|dataset| {
+        dataset.has_capability(DatasetCapability::CREATE_LAYER)
+            && dataset.has_capability(DatasetCapability::DELETE_LAYER)
+    })
+}
+
+/// A folder of GDAL's in-memory file system, removed with everything in it when dropped.
+struct MemFolder(PathBuf);
+
+/// Makes the folders of concurrent runs (the C API may run several) distinct.
+static PROBES: AtomicUsize = AtomicUsize::new(0);
+
+impl MemFolder {
+    fn new() -> MemFolder {
+        let folder = MemFolder(PathBuf::from(format!(
+            "/vsimem/snakegrid-probe-{}-{}",
+            std::process::id(),
+            PROBES.fetch_add(1, Ordering::Relaxed)
+        )));
+        // Drivers that write a folder of files (CSV, Shapefile) want it to exist, as a
+        // staging folder does.
+        if let Some(path) = folder.c_path() {
+            // SAFETY: a NUL-terminated path that outlives the call.
+            unsafe { gdal_sys::VSIMkdir(path.as_ptr(), 0o755) };
+        }
+        folder
+    }
+
+    fn c_path(&self) -> Option<CString> {
+        CString::new(self.0.to_string_lossy().as_bytes()).ok()
+    }
+}
+
+impl Drop for MemFolder {
+    fn drop(&mut self) {
+        if let Some(path) = self.c_path() {
+            // SAFETY: a NUL-terminated path that outlives the call; VSIRmdirRecursive only
+            // removes what is under it in GDAL's in-memory file system.
+            unsafe { gdal_sys::VSIRmdirRecursive(path.as_ptr()) };
+        }
+    }
+}
