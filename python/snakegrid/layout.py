@@ -87,6 +87,17 @@ class GridMap:
         return columns
 
 
+def id_text(value):
+    """A region id as the library takes it: None for a missing value (None, NaN, pandas' NA),
+    a float that is a whole number without its ".0" (pandas reads an integer column with
+    missing values as floats; GDAL, and so the command line, writes 6.0 as "6"), else str()."""
+    if value is None or type(value).__name__ == "NAType" or value != value:
+        return None
+    if isinstance(value, float) and value.is_integer():
+        return str(int(value))
+    return str(value)
+
+
 def _add_features(lib, handle, geometries, ids, labels):
     """Adds every feature with the command line's checks; `labels` name them in messages until
     their ids are known (default "index k")."""
@@ -99,8 +110,9 @@ def _add_features(lib, handle, geometries, ids, labels):
             "of each per region")
     for geometry, region_id, label in zip(geometries, ids, labels):
         wkb = _geometry.to_wkb(geometry)
+        region_id = id_text(region_id)
         lib.check(lib.c.snakegrid_regions_add_feature(
-            handle, str(label).encode(), None if region_id is None else str(region_id).encode(),
+            handle, str(label).encode(), None if region_id is None else region_id.encode(),
             wkb, 0 if wkb is None else len(wkb)))
     return geometries
 
