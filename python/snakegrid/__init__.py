@@ -10,8 +10,9 @@ the working-CRS rule, the input checks and the added fields all come from the li
 
 from ._library import Cancelled, LibraryError, SnakegridError, library_path, load
 from .crs import WorkingCrs, working_crs
-from .layout import Cell, Field, GridMap, LayoutMetrics, RegionMetrics, fields, layout, score
-from .options import Option, options
+from .layout import (
+    Cell, Field, GridMap, LayoutMetrics, RegionMetrics, fields, id_text, layout, score)
+from .options import Option, check_options, options
 
 
 def library_version():
@@ -21,6 +22,6 @@ def library_version():
 
 __all__ = [
     "Cancelled", "Cell", "Field", "GridMap", "LayoutMetrics", "LibraryError", "Option",
-    "RegionMetrics", "SnakegridError", "WorkingCrs", "fields", "layout", "library_path",
-    "library_version", "load", "options", "score", "working_crs",
+    "RegionMetrics", "SnakegridError", "WorkingCrs", "check_options", "fields", "id_text",
+    "layout", "library_path", "library_version", "load", "options", "score", "working_crs",
 ]

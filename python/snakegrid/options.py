@@ -100,3 +100,11 @@ def set_options(lib, handle, values):
     """Sets {name: value} on an options handle; the library refuses what it cannot take."""
     for name, value in values.items():
         lib.check(lib.c.snakegrid_options_set(handle, name.encode(), option_text(value).encode()))
+
+
+def check_options(library=None, **values):
+    """Raises SnakegridError, naming the option, for a value the library would refuse: a host
+    checks a dialog's values with it before reading any feature."""
+    lib = library or _library.load()
+    with lib.handle("options") as handle:
+        set_options(lib, handle, values)
