@@ -1,34 +1,33 @@
-"""What the two algorithms share: the library, the working CRS, reading regions as WKB, progress,
-and the fields and numeric outputs they write. No part of the method lives here."""
+"""What the two algorithms share: the package, reading a layer's features for the library, the
+working CRS, progress and cancelling, and writing the fields the library lists. The policy
+(checks and messages, CRS rule, field names) is the library's; this module only carries it
+into QGIS."""
+
+import os
 
 from qgis.core import (
     QgsCoordinateReferenceSystem,
-    QgsProcessingAlgorithm,
     QgsCoordinateTransform,
+    QgsCsException,
+    QgsFeatureRequest,
     QgsField,
     QgsFields,
     QgsGeometry,
+    QgsProcessingAlgorithm,
     QgsProcessingException,
+    QgsProcessingFeatureSource,
     QgsProcessingOutputNumber,
-    QgsRectangle,
-    QgsWkbTypes,
 )
 from qgis.PyQt.QtCore import QVariant
+from qgis.PyQt.QtGui import QIcon
 
-from .. import binding
+from .. import library
 
-#: The fields a grid layer adds after the source's, as the command line writes them
-#: (src/io/write.rs): name, type, meaning.
-GRID_FIELDS = [
-    ("grid_col", QVariant.Int, "column of the cell, from the left (0 = leftmost used column)"),
-    ("grid_row", QVariant.Int, "row of the cell, from the top (0 = topmost used row)"),
-    ("cell_disp", QVariant.Double, "distance from the region to its cell, in cells"),
-    ("nbr_kept", QVariant.Double, "share of the region's neighbours whose cells still touch"),
-    ("orient_err", QVariant.Double, "mean direction error towards its neighbours, degrees"),
-]
+ICON = os.path.join(os.path.dirname(os.path.dirname(__file__)), "icon.svg")
+HELP_URL = f"{library.HOME}/blob/main/docs/qgis-plugin.md"
 
 #: The four layout metrics (method.md section 8) as numeric outputs: output name, label,
-#: binding.LayoutMetrics attribute.
+#: snakegrid.LayoutMetrics attribute.
 LAYOUT_OUTPUTS = [
     ("C_LOCATION", "C_location: mean distance region to cell, cells (lower is better)",
      "location"),
@@ -39,22 +38,47 @@ LAYOUT_OUTPUTS = [
 ]
 
 
+class Cancelled(Exception):
+    """The user cancelled: the algorithm returns no outputs, which QGIS does not show as a
+    failure (raising QgsProcessingException would print "Execution failed" in red)."""
+
+
 class SnakegridAlgorithm(QgsProcessingAlgorithm):
-    """What every snakegrid algorithm does alike: no group, and no run without the library."""
+    """What every snakegrid algorithm does alike."""
 
     def group(self):
-        return ""
+        return "Grid maps"
 
-    def groupId(self):  # noqa: N802 (QGIS's name)
-        return ""
+    def groupId(self):  # noqa: N802 (QGIS's names throughout)
+        return "gridmaps"
 
-    def canExecute(self):  # noqa: N802
+    def tags(self):
+        return ["grid map", "tile map", "cartogram", "hexagon", "square", "tessellation",
+                "snake model", "equal area"]
+
+    def icon(self):
+        return QIcon(ICON)
+
+    def svgIconPath(self):
+        return ICON
+
+    def helpUrl(self):
+        return HELP_URL
+
+    def canExecute(self):
         # QGIS shows this message in the dialog instead of running.
+        message = library.problem()
+        return (False, message) if message else (True, "")
+
+    def processAlgorithm(self, parameters, context, feedback):
+        sg = library.package()
         try:
-            binding.load()
-        except binding.LibraryError as e:
-            return False, str(e)
-        return True, ""
+            return self.process(sg, parameters, context, feedback)
+        except (Cancelled, sg.Cancelled):
+            feedback.pushWarning("Cancelled")
+            return {}
+        except sg.SnakegridError as e:
+            raise QgsProcessingException(str(e)) from e
 
 
 def add_layout_outputs(algorithm):
@@ -71,127 +95,111 @@ def layout_results(metrics, feedback):
     return results
 
 
-def library():
-    """The loaded library; a missing or incompatible one is a QgsProcessingException whose
-    message says what to do, which QGIS shows instead of a traceback."""
-    try:
-        return binding.load()
-    except binding.LibraryError as e:
-        raise QgsProcessingException(str(e)) from e
-
-
-def library_failure(error):
-    """A library error as QGIS reports algorithm failures, with the library's message."""
-    return QgsProcessingException(str(error))
-
-
-def grid_fields(source_fields, added=GRID_FIELDS):
-    """The source's fields, then `added` (rows of GRID_FIELDS); a source field of the same name
+def grid_fields(source_fields, added):
+    """The source's fields, then `added` (snakegrid.Field rows); a source field of the same name
     (a grid layer made or scored again) gives way to the new one. Returns the fields and the
     indices of the source fields kept."""
-    names = {name.lower() for name, _, _ in added}
+    names = {field.name.lower() for field in added}
     fields = QgsFields()
     kept = []
     for i, field in enumerate(source_fields):
         if field.name().lower() not in names:
             fields.append(field)
             kept.append(i)
-    for name, kind, _ in added:
-        fields.append(QgsField(name, kind))
+    for field in added:
+        kind = QVariant.Int if field.integer else QVariant.Double
+        fields.append(QgsField(field.name, kind, comment=field.description))
     return fields, kept
 
 
-def check_polygons(source, what):
-    """Refuses a layer that is not a polygon layer, naming its geometry type."""
-    kind = QgsWkbTypes.geometryType(source.wkbType())
-    if kind != QgsWkbTypes.PolygonGeometry:
-        raise QgsProcessingException(
-            f"{what} must be a polygon layer; this one has "
-            f"{QgsWkbTypes.displayString(source.wkbType()) or 'no'} geometries."
-        )
+def _id(value):
+    """An attribute as the package takes an id: None for QGIS's NULL, else the value (the
+    package writes whole floats as the command line does)."""
+    if value is None or (hasattr(value, "isNull") and value.isNull()):
+        return None
+    return value
 
 
-class Regions:
-    """The features of a polygon source, with each one's id and geometry as they will be given to
-    the library (in the working CRS, as WKB)."""
+class Features:
+    """The features of a source as the library takes them: ids (the id field's values, else the
+    feature ids, as on the command line), labels naming them ("FID 3") and their geometries.
+    The library checks each one (snakegrid.layout and .score), with the command line's
+    messages."""
 
-    def __init__(self, source, id_field, what, feedback, progress_to=10.0):
-        """Reads `source` (a QgsProcessingFeatureSource). `id_field` empty means the feature
-        id, as on the command line. Progress goes from 0 to `progress_to` percent."""
-        check_polygons(source, what)
+    def __init__(self, source, id_field, feedback, progress_to):
         self.crs = source.sourceCrs()
         self.fields = source.fields()
-        self.features = []
-        self.ids = []
-        self.geometries = []
         id_index = self.fields.lookupField(id_field) if id_field else -1
+        self.features, self.ids, self.labels, self.geometries = [], [], [], []
         total = max(source.featureCount(), 1)
-        for n, feature in enumerate(source.getFeatures()):
+        # The library checks and repairs geometries as the command line does (a bow-tie is
+        # repaired with a note): QGIS's own validity check would refuse them first.
+        features = source.getFeatures(
+            QgsFeatureRequest(), QgsProcessingFeatureSource.FlagSkipGeometryValidityChecks)
+        for n, feature in enumerate(features):
             if feedback.isCanceled():
-                raise QgsProcessingException("Cancelled.")
-            region_id = _text(feature.attribute(id_index)) if id_index >= 0 else str(feature.id())
-            if region_id is None:
-                raise QgsProcessingException(
-                    f"{what}: feature {feature.id()} has no value in the id field {id_field}."
-                )
-            geometry = feature.geometry()
-            if geometry.isNull() or geometry.isEmpty():
-                raise QgsProcessingException(f"{what}: feature {region_id} has no geometry.")
-            if QgsWkbTypes.geometryType(geometry.wkbType()) != QgsWkbTypes.PolygonGeometry:
-                raise QgsProcessingException(
-                    f"{what}: feature {region_id} is a "
-                    f"{QgsWkbTypes.displayString(geometry.wkbType())}, not a polygon."
-                )
-            if QgsWkbTypes.isCurvedType(geometry.wkbType()):
-                # The C API reads Polygon and MultiPolygon WKB only.
-                geometry = QgsGeometry(geometry.constGet().segmentize())
+                raise Cancelled()
             self.features.append(feature)
-            self.ids.append(region_id)
-            self.geometries.append(geometry)
+            self.ids.append(
+                _id(feature.attribute(id_index)) if id_index >= 0 else str(feature.id()))
+            self.labels.append(f"FID {feature.id()}")
+            geometry = feature.geometry()
+            self.geometries.append(None if geometry.isNull() else geometry)
             feedback.setProgress(progress_to * (n + 1) / total)
-        if not self.features:
-            raise QgsProcessingException(f"{what} has no features to lay out.")
 
-    def extent(self):
-        box = QgsRectangle()
-        box.setMinimal()
-        for geometry in self.geometries:
-            box.combineExtentWith(geometry.boundingBox())
-        return box
+    def boxes(self):
+        """Each region's extent in the source CRS, for the working-CRS rule."""
+        return [(b.xMinimum(), b.yMinimum(), b.xMaximum(), b.yMaximum())
+                for b in (g.boundingBox() for g in self.geometries
+                          if g is not None and not g.isEmpty())]
 
-    def wkb(self, working_crs, context):
-        """(id, WKB) pairs in `working_crs`."""
+    def wkb(self, crs, context):
+        """The geometries in `crs` as WKB (None for a null geometry)."""
         transform = None
-        if self.crs.isValid() and working_crs != self.crs:
-            transform = QgsCoordinateTransform(self.crs, working_crs, context.transformContext())
-        pairs = []
-        for region_id, geometry in zip(self.ids, self.geometries):
-            if transform is not None:
+        if self.crs.isValid() and crs.isValid() and crs != self.crs:
+            transform = QgsCoordinateTransform(self.crs, crs, context.transformContext())
+        out = []
+        for label, geometry in zip(self.labels, self.geometries):
+            if geometry is not None and transform is not None:
                 geometry = QgsGeometry(geometry)
-                geometry.transform(transform)
-            pairs.append((region_id, bytes(geometry.asWkb())))
-        return pairs
+                try:
+                    geometry.transform(transform)
+                except QgsCsException as e:
+                    raise QgsProcessingException(
+                        f"feature {label}: cannot project the geometry to "
+                        f"{crs.description()}: {e}") from e
+            out.append(None if geometry is None else bytes(geometry.asWkb()))
+        return out
 
 
-def working_crs(crs, extent, feedback):
-    """The CRS the method works in, as on the command line: the layer's if it is projected, else
-    a Lambert azimuthal equal-area CRS centred on the features' extent (in degrees)."""
-    if not crs.isValid():
+def working_crs(sg, features, target, feedback):
+    """The CRS to lay out in, as the command line's -t_srs decides: `target` when valid, else
+    the layer's own when projected, else the library's equal-area rule for the features'
+    extents, made from its named WKT2 (QGIS then shows its name; nothing is saved to the
+    user's CRS database)."""
+    source = features.crs
+    if target.isValid():
+        if not source.isValid():
+            raise QgsProcessingException(
+                f"The layer has no CRS, so it cannot be projected to {target.authid()}.")
+        if target.isGeographic():
+            feedback.pushWarning(
+                f"The target CRS {target.authid()} is geographic: the cells are squares in "
+                "degrees.")
+        return target
+    if not source.isValid():
         feedback.pushWarning("The layer has no CRS: its coordinates are taken as planar.")
-        return crs
-    if not crs.isGeographic():
-        return crs
-    lon, lat = extent.center().x(), extent.center().y()
-    # Six decimals (about 0.1 m), the command line's definition to the character.
-    definition = f"+proj=laea +lat_0={lat:.6f} +lon_0={lon:.6f} +datum=WGS84 +units=m +no_defs"
-    working = QgsCoordinateReferenceSystem.fromProj(definition)
-    if not working.isValid():
-        raise QgsProcessingException(f"Cannot make the working CRS {definition}.")
+        return source
+    if not source.isGeographic():
+        return source
+    chosen = sg.working_crs(features.boxes())
+    crs = QgsCoordinateReferenceSystem.fromWkt(chosen.wkt)
+    if not crs.isValid():
+        raise QgsProcessingException(f"QGIS cannot read the working CRS {chosen.wkt}")
     feedback.pushInfo(
-        f"The layer's CRS {crs.authid() or crs.description()} is geographic: working in "
-        f"Lambert azimuthal equal-area centred on the layer ({definition})."
-    )
-    return working
+        f"The layer's CRS {source.authid() or source.description()} is geographic: "
+        f"{chosen.note}.")
+    return crs
 
 
 def geometry_from_wkb(wkb):
@@ -200,19 +208,11 @@ def geometry_from_wkb(wkb):
     return geometry
 
 
-def _text(value):
-    """An attribute as an id: None for NULL, integral numbers without a decimal part."""
-    if value is None or (hasattr(value, "isNull") and value.isNull()):
-        return None
-    if isinstance(value, float) and value.is_integer():
-        return str(int(value))
-    return str(value)
-
-
 class Progress:
-    """The library's progress callback driving a QgsProcessingFeedback between two percentages;
-    answers "stop" once the user cancels. The library calls it from worker threads, one call at
-    a time; QgsProcessingFeedback may be updated from any thread."""
+    """The library's progress callback driving a QgsProcessingFeedback between two percentages,
+    with each named stage as the progress text (which the log shows); answers "stop" once the
+    user cancels. The library calls it from worker threads, one call at a time;
+    QgsProcessingFeedback may be updated from any thread."""
 
     def __init__(self, feedback, start, end):
         self.feedback, self.start, self.end = feedback, start, end
