@@ -1,38 +1,46 @@
 #!/usr/bin/env bash
-# Builds the installable QGIS plugin zip: the release library without GDAL (the plugin reads and
-# writes through QGIS, so the library links only the C runtime and loads beside any GDAL), then
-# qgis-plugin/snakegrid/ with libsnakegrid.so beside its Python files, zipped as QGIS expects
-# (one top folder, snakegrid/).
+# Builds the QGIS plugin zip, one top folder snakegrid_qgis/ as QGIS expects:
+# - by default the offline zip (target/snakegrid-qgis-plugin.zip): the plugin with the snakegrid
+#   Python package vendored in snakegrid_qgis/vendor/, taken from the wheel that
+#   scripts/build-wheel.sh builds (so its GDAL-free library is inside), for Install from ZIP;
+# - with --repository, the build for plugins.qgis.org (target/snakegrid-qgis-plugin-repository.zip):
+#   pure Python, no compiled file; it uses the snakegrid wheel installed in QGIS's Python and says
+#   how to install it when it is missing.
 #
-# Usage: scripts/build-qgis-plugin.sh [OUT.zip]     (default target/snakegrid-qgis-plugin.zip)
-# Install it in QGIS with Plugins > Manage and Install Plugins > Install from ZIP.
+# Usage: scripts/build-qgis-plugin.sh [--repository] [OUT.zip]     (prints the zip's path)
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-out="${1:-$root/target/snakegrid-qgis-plugin.zip}"
+kind=offline
+if [ "${1:-}" = "--repository" ]; then
+    kind=repository
+    shift
+fi
+default="$root/target/snakegrid-qgis-plugin.zip"
+[ "$kind" = repository ] && default="$root/target/snakegrid-qgis-plugin-repository.zip"
+out="${1:-$default}"
 mkdir -p "$(dirname "$out")"
 out="$(realpath "$out")"
-
-cargo build --manifest-path "$root/Cargo.toml" --release --lib --no-default-features
-library="$root/target/release/libsnakegrid.so"
-if ldd "$library" | grep -q gdal; then
-    echo "build-qgis-plugin: $library links GDAL" >&2
-    exit 1
-fi
 
 staging="$(mktemp -d)"
 trap 'rm -rf "$staging"' EXIT
 # The plugin's files only: no tests, no Python caches.
-cp -r "$root/qgis-plugin/snakegrid" "$staging/snakegrid"
+cp -r "$root/qgis-plugin/snakegrid_qgis" "$staging/snakegrid_qgis"
 find "$staging" -name __pycache__ -type d -prune -exec rm -rf {} +
-# Debug symbols are most of the library's size and of no use inside QGIS.
-strip --strip-debug -o "$staging/snakegrid/libsnakegrid.so" "$library"
+if [ "$kind" = offline ]; then
+    wheel="$("$root/scripts/build-wheel.sh")"
+    python3 -c '
+import sys, zipfile
+with zipfile.ZipFile(sys.argv[1]) as z:
+    z.extractall(sys.argv[2], [n for n in z.namelist() if n.startswith("snakegrid/")])
+' "$wheel" "$staging/snakegrid_qgis/vendor"
+fi
 
 rm -f "$out"
 (cd "$staging" && python3 -c '
 import os, sys, zipfile
 with zipfile.ZipFile(sys.argv[1], "w", zipfile.ZIP_DEFLATED) as z:
-    for folder, _, files in sorted(os.walk("snakegrid")):
+    for folder, _, files in sorted(os.walk("snakegrid_qgis")):
         for name in sorted(files):
             path = os.path.join(folder, name)
             z.write(path, path)

@@ -1,10 +1,14 @@
-"""The snakegrid QGIS plugin under a headless QGIS: provider, algorithms, errors, qgis_process."""
+"""The snakegrid QGIS plugin under a headless QGIS: provider, parameters from the library's
+table, layouts against the command line, CRS, cancelling, errors, notes, qgis_process, and the
+repository build."""
 
+import configparser
+import csv
 import os
 import re
 import subprocess
+import sys
 import threading
-import time
 import zipfile
 
 import _ctypes
@@ -16,21 +20,45 @@ from qgis.core import (
     QgsFeatureRequest,
     QgsField,
     QgsGeometry,
-    QgsPointXY,
-    QgsProcessingFeatureSourceDefinition,
+    QgsProcessingAlgRunnerTask,
+    QgsProcessingContext,
     QgsProcessingException,
+    QgsProcessingFeatureSourceDefinition,
     QgsProcessingFeedback,
+    QgsProcessingParameterString,
     QgsProject,
     QgsRectangle,
     QgsVectorLayer,
 )
 from qgis.PyQt.QtCore import QVariant
 
-from conftest import CLI, DATA, PLUGIN_PARENT
+from conftest import BAD, CLI, DATA, PYTHON, WHEEL, install_wheel
 
 US_STATES = os.path.join(DATA, "us_states.gpkg")
-GRID_FIELDS = ["grid_col", "grid_row", "cell_disp", "nbr_kept", "orient_err"]
+US_COUNTIES = os.path.join(DATA, "us_counties.gpkg")
+ANTIMERIDIAN = os.path.join(BAD, "antimeridian.geojson")
 METRICS = ["C_LOCATION", "C_ADJACENT", "C_ORIENTATION", "C_SHAPE"]
+
+
+class Log(QgsProcessingFeedback):
+    """A feedback that keeps what the algorithm said."""
+
+    def __init__(self):
+        super().__init__()
+        self.lines = []
+        self.texts = []
+
+    def pushInfo(self, info):  # noqa: N802 (QGIS's names)
+        self.lines.append(info)
+
+    def pushWarning(self, warning):  # noqa: N802
+        self.lines.append(warning)
+
+    def setProgressText(self, text):  # noqa: N802
+        self.texts.append(text)
+
+    def reportError(self, error, fatalError=False):  # noqa: N802
+        self.lines.append(f"error: {error}")
 
 
 def run(algorithm, **parameters):
@@ -47,9 +75,15 @@ def layout(layer, id_field="id"):
     return {str(f[id_field]): (f["grid_col"], f["grid_row"]) for f in layer.getFeatures()}
 
 
-def squares_layer(ids, crs="EPSG:3857", side=1000.0, cols=3, kind="Polygon"):
+def cli(out, source, *arguments, id_field="id"):
+    """The command line's grid map of `source`, written to `out` (a path, returned)."""
+    subprocess.run([CLI, "-q", "--id", id_field, *arguments, out, source], check=True)
+    return out
+
+
+def squares_layer(ids, crs="EPSG:3857", side=1000.0, cols=3):
     """A memory layer of squares in a block `cols` wide, ids from `ids`."""
-    layer = QgsVectorLayer(f"{kind}?crs={crs}", "squares", "memory")
+    layer = QgsVectorLayer(f"Polygon?crs={crs}", "squares", "memory")
     provider = layer.dataProvider()
     provider.addAttributes([QgsField("code", QVariant.String)])
     layer.updateFields()
@@ -58,10 +92,7 @@ def squares_layer(ids, crs="EPSG:3857", side=1000.0, cols=3, kind="Polygon"):
         x, y = side * (k % cols), side * (k // cols)
         feature = QgsFeature(layer.fields())
         feature.setAttributes([region_id])
-        if kind == "Polygon":
-            feature.setGeometry(QgsGeometry.fromRect(QgsRectangle(x, y, x + side, y + side)))
-        else:
-            feature.setGeometry(QgsGeometry.fromPointXY(QgsPointXY(x, y)))
+        feature.setGeometry(QgsGeometry.fromRect(QgsRectangle(x, y, x + side, y + side)))
         features.append(feature)
     provider.addFeatures(features)
     return layer
@@ -74,6 +105,9 @@ def assert_square_cells(layer, count):
         geometry = feature.geometry()
         assert geometry.isGeosValid()
         assert geometry.constGet().nCoordinates() == 5  # a closed square ring
+        box = geometry.boundingBox()
+        assert box.width() == pytest.approx(box.height(), rel=1e-9)
+        assert geometry.area() == pytest.approx(box.width() * box.height(), rel=1e-9)
         areas.append(geometry.area())
     assert max(areas) == pytest.approx(min(areas), rel=1e-9)
     cells = {(f["grid_col"], f["grid_row"]) for f in layer.getFeatures()}
@@ -82,9 +116,7 @@ def assert_square_cells(layer, count):
 
 @pytest.fixture(scope="module")
 def cli_layout(tmp_path_factory):
-    out = str(tmp_path_factory.mktemp("cli") / "out.gpkg")
-    subprocess.run([CLI, "-q", out, US_STATES, "--id", "id"], check=True)
-    return layout(out)
+    return layout(cli(str(tmp_path_factory.mktemp("cli") / "out.gpkg"), US_STATES))
 
 
 @pytest.fixture(scope="module")
@@ -93,59 +125,97 @@ def us_run(qgis_app):
                OUTLINE="memory:")
 
 
-def test_provider_and_algorithms_are_registered(qgis_app):
-    registry = QgsApplication.processingRegistry()
-    provider = registry.providerById("snakegrid")
-    assert provider is not None
-    assert not provider.icon().isNull()
+@pytest.fixture(scope="module")
+def us_states_lonlat(qgis_app, tmp_path_factory):
+    import processing
+
+    path = str(tmp_path_factory.mktemp("lonlat") / "us_states_4326.gpkg")
+    processing.run("native:reprojectlayer", {
+        "INPUT": US_STATES, "TARGET_CRS": QgsCoordinateReferenceSystem("EPSG:4326"),
+        "OUTPUT": path})
+    return path
+
+
+def algorithm(name):
+    return QgsApplication.processingRegistry().algorithmById(f"snakegrid:{name}")
+
+
+def test_provider_and_algorithms_are_registered_and_findable(qgis_app):
+    provider = QgsApplication.processingRegistry().providerById("snakegrid")
+    assert provider is not None and not provider.icon().isNull()
     assert re.match(r"^\d+\.\d+\.\d+ \(library \d+\.\d+\.\d+\)$", provider.versionInfo())
     assert provider.warningMessage() == ""
-    for algorithm in ("gridmap", "gridmetrics"):
-        alg = registry.algorithmById(f"snakegrid:{algorithm}")
-        assert alg is not None
+    for name in ("gridmap", "gridmetrics"):
+        alg = algorithm(name)
         assert alg.canExecute() == (True, "")
-        assert len(alg.shortHelpString()) > 300
+        assert alg.group() and alg.groupId()
+        assert {"tile map", "cartogram", "hexagon"} <= set(alg.tags())
+        assert not alg.icon().isNull()
+        assert alg.helpUrl().startswith("https://github.com/snakegrid/snakegrid/")
+        help_text = alg.shortHelpString()
+        assert len(help_text) > 300 and not re.search(r"<\w+>", help_text), "HTML in the help"
 
 
-def test_defaults_and_help_follow_the_command_line(qgis_app):
-    from snakegrid.algorithms.gridmap import METHOD_PARAMETERS
+def test_parameters_are_the_library_table_in_upper_case(qgis_app):
+    import snakegrid
 
-    help_text = subprocess.run([CLI, "--help"], check=True, capture_output=True,
-                               text=True).stdout
-    cli = dict(re.findall(r"--(\w+) <VALUE>\n\s+.*?\[default: ([^\]]+)\]", help_text, re.S))
-    table = {row[0]: row for row in METHOD_PARAMETERS}
-    assert set(table) == set(cli), "the table and the command line list different parameters"
-
-    def numbers(text):
-        return [float(n) for n in re.split("[,:]", text)]
-
-    alg = QgsApplication.processingRegistry().algorithmById("snakegrid:gridmap")
-    for name, (_, _, kind, default, advanced, text) in table.items():
-        expected = cli[name]
-        if default is None or kind in ("bool", "enum"):
-            assert str(default).lower() == expected, name
+    alg = algorithm("gridmap")
+    table = snakegrid.options()
+    method = [p for p in alg.parameterDefinitions()
+              if p.name() not in ("INPUT", "ID_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT",
+                                  "OUTLINE")]
+    assert [p.name() for p in method] == [o.name.upper() for o in table]
+    assert all(p.name() == p.name().upper() for p in alg.parameterDefinitions())
+    for option, parameter in zip(table, method):
+        assert option.help in parameter.help() and option.range in parameter.help()
+        assert bool(parameter.flags() & parameter.FlagAdvanced) == option.advanced
+        assert parameter.name() in alg.shortHelpString()
+        if isinstance(parameter, QgsProcessingParameterString):
+            assert parameter.defaultValue() == option.default
+        elif option.kind in ("real", "integer"):
+            if option.minimum is not None:
+                assert parameter.minimum() == option.minimum, option.name
+            if option.maximum is not None:
+                assert parameter.maximum() == option.maximum, option.name
+            if option.default != "none":
+                assert parameter.defaultValue() == float(option.default), option.name
+        elif option.kind == "bool":
+            assert parameter.defaultValue() == (option.default == "true")
         else:
-            assert numbers(str(default)) == numbers(expected), name
-        parameter = alg.parameterDefinition(name)
-        assert parameter is not None and parameter.help() == text
-        assert bool(parameter.flags() & parameter.FlagAdvanced) == advanced
-        assert f"({name}, default" in alg.shortHelpString()
+            assert parameter.options() == list(option.choices)
+            assert parameter.defaultValue() == option.default
+    # The 64-bit seed keeps every value: it is text the library checks.
+    seed = alg.parameterDefinition("SEED")
+    assert isinstance(seed, QgsProcessingParameterString)
 
 
 def test_us_states_gives_the_command_line_layout(us_run, cli_layout):
+    import snakegrid
+
     grid = us_run["OUTPUT"]
     assert_square_cells(grid, 49)
     names = grid.fields().names()
     source = QgsVectorLayer(US_STATES, "src", "ogr")
-    assert names[: len(source.fields())] == source.fields().names()
-    assert names[-5:] == GRID_FIELDS
+    added = [f.name for f in snakegrid.fields()]
+    assert names == source.fields().names() + added
     assert grid.crs().authid() == "EPSG:5070"
     assert layout(grid) == cli_layout
-    assert 0 <= us_run["C_ADJACENT"] <= 1 and 0 <= us_run["C_SHAPE"] <= 1
-    assert us_run["C_LOCATION"] >= 0 and 0 <= us_run["C_ORIENTATION"] <= 180
     outline = list(us_run["OUTLINE"].getFeatures())
     assert len(outline) == 1 and outline[0].geometry().isGeosValid()
     assert outline[0]["regions"] == 49
+
+
+def test_named_progress_stages_reach_the_log(qgis_app):
+    import snakegrid
+
+    layer = squares_layer([f"r{k}" for k in range(9)])
+    stages = []
+    ids = [f["code"] for f in layer.getFeatures()]
+    snakegrid.layout([bytes(f.geometry().asWkb()) for f in layer.getFeatures()], ids,
+                     progress=lambda fraction, message: stages.append(message))
+    log = Log()
+    run("gridmap", INPUT=layer, ID_FIELD="code", OUTPUT="memory:", feedback=log)
+    assert set(stages) <= set(log.texts)
 
 
 def test_selected_features_only(qgis_app):
@@ -171,52 +241,126 @@ def test_a_memory_layer_works(qgis_app):
     assert layout(grid, "code") == {f"r{k}": (k % 3, 2 - k // 3) for k in range(9)}
 
 
-def test_a_geographic_layer_is_projected_like_the_command_line(qgis_app, tmp_path):
-    import processing
+def test_a_lon_lat_layer_gets_the_librarys_named_crs(us_states_lonlat, tmp_path):
+    import snakegrid
 
-    geographic = str(tmp_path / "us_states_4326.gpkg")
-    processing.run("native:reprojectlayer", {
-        "INPUT": US_STATES, "TARGET_CRS": QgsCoordinateReferenceSystem("EPSG:4326"),
-        "OUTPUT": geographic})
-    result = run("gridmap", INPUT=geographic, ID_FIELD="id", OUTPUT="memory:")
-    grid = result["OUTPUT"]
+    log = Log()
+    grid = run("gridmap", INPUT=us_states_lonlat, ID_FIELD="id", OUTPUT="memory:",
+               feedback=log)["OUTPUT"]
     assert_square_cells(grid, 49)
-    assert "+proj=laea" in grid.crs().toProj()
-    out = str(tmp_path / "cli.gpkg")
-    subprocess.run([CLI, "-q", out, geographic, "--id", "id"], check=True)
-    assert layout(grid) == layout(out)
+    assert layout(grid) == layout(cli(str(tmp_path / "cli.gpkg"), us_states_lonlat))
+    # The name QGIS shows is the one the library gives the layer's regions, up to its first
+    # "°": QGIS 3.22's fromWkt reads WKT as Latin-1, so every non-ASCII character becomes a
+    # replacement character (GDAL's GeoPackage writer does the same to the command line's).
+    source = QgsVectorLayer(us_states_lonlat, "source", "ogr")
+    boxes = [f.geometry().boundingBox() for f in source.getFeatures()]
+    chosen = snakegrid.working_crs(
+        [(b.xMinimum(), b.yMinimum(), b.xMaximum(), b.yMaximum()) for b in boxes])
+    name = grid.crs().description()
+    assert name and name.startswith(chosen.name.split("°")[0])
+    assert len(name) == len(chosen.name)
+    out = str(tmp_path / "grid.gpkg")
+    run("gridmap", INPUT=us_states_lonlat, ID_FIELD="id", OUTPUT=out)
+    assert QgsVectorLayer(out, "grid", "ogr").crs().description() == name
 
 
-def test_cancelling_stops_the_run(qgis_app):
-    feedback = QgsProcessingFeedback()
-    # As the Cancel button does: another thread cancels the feedback during the run.
-    threading.Timer(1.0, feedback.cancel).start()
-    started = time.monotonic()
-    with pytest.raises(QgsProcessingException, match="(?i)cancel"):
-        run("gridmap", INPUT=US_STATES, ID_FIELD="id", OUTPUT="memory:", feedback=feedback,
-            refine_moves=10_000_000)
-    # Ten million refinement moves take far longer than this.
-    assert time.monotonic() - started < 20
+def test_target_crs_gives_square_cells_in_it(us_states_lonlat, tmp_path):
+    result = run("gridmap", INPUT=us_states_lonlat, ID_FIELD="id", OUTPUT="memory:",
+                 TARGET_CRS="EPSG:3857")
+    grid = result["OUTPUT"]
+    assert grid.crs().authid() == "EPSG:3857"
+    assert_square_cells(grid, 49)
+    expected = cli(str(tmp_path / "cli.gpkg"), us_states_lonlat, "--t_srs", "EPSG:3857")
+    assert layout(grid) == layout(expected)
 
 
-def test_a_point_layer_is_refused_readably(qgis_app):
-    layer = squares_layer(["a", "b", "c"], kind="Point")
+def test_cancel_ends_the_run_as_cancelled_with_no_layer(qgis_app):
+    """As the dialog runs it: a task, and the Cancel button cancels the feedback. QGIS 3.22's
+    task reports any run whose feedback was cancelled as not successful (the dialog then adds
+    its own "Execution failed after" line); the algorithm's part is to end at once, say
+    "Cancelled", report no error and leave no output to load."""
+    alg = algorithm("gridmap")
+    context = QgsProcessingContext()
+    context.setProject(QgsProject.instance())
+    log = Log()
+    started = threading.Event()
+
+    def progress(value):
+        if value > 10.5:  # reading done, the library is at work
+            started.set()
+
+    log.progressChanged.connect(progress)
+    task = QgsProcessingAlgRunnerTask(
+        alg, {"INPUT": US_COUNTIES, "ID_FIELD": "id", "OUTPUT": "TEMPORARY_OUTPUT"},
+        context, log)
+    outcome = []
+    task.executed.connect(lambda ok, results: outcome.append((ok, results)))
+    QgsApplication.taskManager().addTask(task)
+    while not started.is_set() and not outcome:
+        QgsApplication.processEvents()
+        started.wait(0.05)
+    log.cancel()
+    while not outcome:
+        QgsApplication.processEvents()
+        threading.Event().wait(0.05)
+    _, results = outcome[0]
+    assert "OUTPUT" not in results
+    assert not [line for line in log.lines if line.startswith("error:")], log.lines
+    assert not context.layersToLoadOnCompletion()
+    assert log.lines[-1] == "Cancelled"
+
+
+def test_cancel_from_a_script_returns_no_output(qgis_app):
+    log = Log()
+    threading.Timer(0.5, log.cancel).start()
+    results = run("gridmap", INPUT=US_COUNTIES, ID_FIELD="id", OUTPUT="memory:", feedback=log)
+    assert "OUTPUT" not in results and "Cancelled" in log.lines
+
+
+def bad_cases():
+    with open(os.path.join(BAD, "cases.tsv"), encoding="utf-8") as f:
+        rows = [r for r in csv.reader(f, delimiter="\t") if r and not r[0].startswith("#")]
+    return [r for r in rows if r[2] == "invalid_input" and r[1] != "-"]
+
+
+@pytest.mark.parametrize("case", bad_cases(), ids=lambda r: r[0])
+def test_bad_input_gives_the_command_line_message(qgis_app, case, tmp_path):
+    name, id_field, _, expected = case
+    path = os.path.join(BAD, name)
+    done = subprocess.run([CLI, "-q", "--id", id_field, str(tmp_path / "o.gpkg"), path],
+                          capture_output=True, text=True)
+    cli_message = done.stderr.strip().removeprefix("snakegrid: ERROR: ")
+    assert done.returncode == 1 and expected in cli_message
     with pytest.raises(QgsProcessingException) as error:
-        run("gridmap", INPUT=layer, ID_FIELD="code", OUTPUT="memory:")
-    assert "polygon" in str(error.value).lower()
-    assert "Traceback" not in str(error.value)
+        run("gridmap", INPUT=path, ID_FIELD=id_field, OUTPUT="memory:")
+    assert str(error.value).split(": ", 1)[1] == cli_message
 
 
-def test_duplicate_ids_are_refused_naming_the_id(qgis_app):
-    layer = squares_layer(["a", "b", "b", "c"])
-    with pytest.raises(QgsProcessingException, match=r"snakegrid_run: .*\bb\b.*"):
-        run("gridmap", INPUT=layer, ID_FIELD="code", OUTPUT="memory:")
-
-
-def test_a_bad_option_gives_the_library_message(qgis_app):
+def test_a_bad_option_is_refused_by_name_before_reading(qgis_app):
     layer = squares_layer(["a", "b", "c"])
+    alg = algorithm("gridmap")
+    ok, message = alg.checkParameterValues(
+        {"INPUT": layer, "ID_FIELD": "code", "OUTPUT": "memory:", "SHIFTS": "2:2"},
+        QgsProcessingContext())
+    assert not ok and "shifts" in message
     with pytest.raises(QgsProcessingException, match="shifts"):
-        run("gridmap", INPUT=layer, ID_FIELD="code", OUTPUT="memory:", shifts="2:2")
+        run("gridmap", INPUT=layer, ID_FIELD="code", OUTPUT="memory:", SHIFTS="2:2")
+    ok, message = alg.checkParameterValues(
+        {"INPUT": layer, "OUTPUT": "memory:", "SEED": str(2**64)}, QgsProcessingContext())
+    assert not ok and "seed" in message
+
+
+def test_a_64_bit_seed_runs(qgis_app):
+    result = run("gridmap", INPUT=squares_layer(list("abcdef")), ID_FIELD="code",
+                 OUTPUT="memory:", SEED=str(2**64 - 1))
+    assert result["OUTPUT"].featureCount() == 6
+
+
+def test_the_library_notes_are_logged(qgis_app):
+    log = Log()
+    run("gridmap", INPUT=os.path.join(BAD, "bowtie.geojson"), ID_FIELD="code",
+        OUTPUT="memory:", feedback=log)
+    assert any("feature bowtie: invalid polygon repaired" in line for line in log.lines)
 
 
 def test_metrics_rescore_the_layout_and_see_an_edit(us_run):
@@ -228,7 +372,8 @@ def test_metrics_rescore_the_layout_and_see_an_edit(us_run):
     assert scored["OUTPUT"].featureCount() == 49
     by_id = {f["id"]: f for f in scored["OUTPUT"].getFeatures()}
     for feature in grid.getFeatures():
-        assert by_id[feature["id"]]["nbr_kept"] == pytest.approx(feature["nbr_kept"])
+        for field in ("cell_disp", "nbr_kept", "orient_err"):
+            assert by_id[feature["id"]][field] == pytest.approx(feature[field]), field
 
     # Swap the cells of Maine and California: a worse layout, scored as such.
     edited = grid.materialize(QgsFeatureRequest())
@@ -250,61 +395,141 @@ def test_metrics_refuse_a_missing_cell_naming_it(us_run):
         run("gridmetrics", REGIONS=US_STATES, REGION_ID="id", GRID=grid, OUTPUT="memory:")
 
 
-def test_a_missing_or_foreign_library_is_explained(qgis_app, monkeypatch, tmp_path):
-    from snakegrid import binding
+def test_a_missing_package_or_foreign_library_is_explained(qgis_app, monkeypatch):
+    from snakegrid_qgis import library
 
-    missing = str(tmp_path / "libsnakegrid.so")
-    monkeypatch.setenv("SNAKEGRID_LIBRARY", missing)
-    alg = QgsApplication.processingRegistry().algorithmById("snakegrid:gridmap")
+    monkeypatch.setitem(sys.modules, "snakegrid", None)  # import snakegrid now fails
+    alg = algorithm("gridmap")
     ok, message = alg.canExecute()
-    assert not ok and missing in message and "SNAKEGRID_LIBRARY" in message
-    provider = QgsApplication.processingRegistry().providerById("snakegrid")
-    assert provider.warningMessage() == message
-    with pytest.raises(QgsProcessingException, match="not found"):
+    command = f"{PYTHON} -m pip install --user --break-system-packages {library.wheel_name()}"
+    assert not ok and command in message and library.RELEASES in message
+    assert QgsApplication.processingRegistry().providerById("snakegrid").warningMessage() \
+        == message
+    with pytest.raises(QgsProcessingException, match=re.escape(command)):
         run("gridmap", INPUT=squares_layer(["a", "b"]), OUTPUT="memory:")
+    monkeypatch.undo()
     # Any shared library without snakegrid's functions: Python's own ctypes module will do.
-    with pytest.raises(binding.LibraryError, match="not a snakegrid library"):
-        binding.Library(_ctypes.__file__)
+    monkeypatch.setenv("SNAKEGRID_LIBRARY", _ctypes.__file__)
+    ok, message = alg.canExecute()
+    assert not ok and "not a snakegrid library" in message and command in message
 
 
-@pytest.fixture(scope="module")
-def installed_plugin(tmp_path_factory):
-    """The plugin folder as QGIS installs it: from the zip when SNAKEGRID_PLUGIN_ZIP names one
-    (scripts/test-qgis-plugin.sh builds it), else this source tree with $SNAKEGRID_LIBRARY."""
-    archive = os.environ.get("SNAKEGRID_PLUGIN_ZIP")
-    env = dict(os.environ, QT_QPA_PLATFORM="offscreen",
+def test_the_plugin_names_the_wheel_that_is_built():
+    from snakegrid_qgis import library
+
+    assert library.wheel_name() == os.path.basename(WHEEL)
+
+
+# --- the plugin installed from its zips, run by qgis_process ---------------------------------
+
+def plugin_env(tmp_path_factory, archive, user_base):
+    """An environment in which qgis_process finds the plugin unpacked from `archive`, with
+    `user_base` as the user's Python site (empty: no snakegrid package)."""
+    plugins = tmp_path_factory.mktemp("plugins")
+    with zipfile.ZipFile(archive) as z:
+        z.extractall(plugins)
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen", QGIS_PLUGINPATH=str(plugins),
+               PYTHONUSERBASE=user_base,
                QGIS_CUSTOM_CONFIG_PATH=str(tmp_path_factory.mktemp("qgis_process_profile")))
-    if archive:
-        plugins = tmp_path_factory.mktemp("plugins")
-        with zipfile.ZipFile(archive) as z:
-            assert "snakegrid/libsnakegrid.so" in z.namelist()
-            assert "snakegrid/metadata.txt" in z.namelist()
-            z.extractall(plugins)
-        env.pop("SNAKEGRID_LIBRARY", None)  # the bundled library must be found on its own
-        env["QGIS_PLUGINPATH"] = str(plugins)
-    else:
-        env["QGIS_PLUGINPATH"] = PLUGIN_PARENT
-    subprocess.run(["/usr/bin/qgis_process.bin", "plugins", "enable", "snakegrid"],
+    env.pop("SNAKEGRID_LIBRARY", None)  # the plugin must find its library on its own
+    subprocess.run(["/usr/bin/qgis_process.bin", "plugins", "enable", "snakegrid_qgis"],
                    env=env, check=True, capture_output=True)
     return env
 
 
-def test_qgis_process_runs_the_algorithm(installed_plugin, cli_layout, tmp_path):
-    out = str(tmp_path / "grid.gpkg")
-    outline = str(tmp_path / "outline.gpkg")
-    done = subprocess.run(
-        ["/usr/bin/qgis_process.bin", "run", "snakegrid:gridmap", "--",
-         f"INPUT={US_STATES}", "ID_FIELD=id", "LABEL_FIELD=abbr", f"OUTPUT={out}",
-         f"OUTLINE={outline}"],
-        env=installed_plugin, capture_output=True, text=True, timeout=300)
+@pytest.fixture(scope="module")
+def offline_plugin(tmp_path_factory):
+    return plugin_env(tmp_path_factory, os.environ["SNAKEGRID_PLUGIN_ZIP"],
+                      str(tmp_path_factory.mktemp("empty_user_base")))
+
+
+@pytest.fixture(scope="module")
+def repository_plugin_without_wheel(tmp_path_factory):
+    return plugin_env(tmp_path_factory, os.environ["SNAKEGRID_PLUGIN_REPOSITORY_ZIP"],
+                      str(tmp_path_factory.mktemp("empty_user_base")))
+
+
+@pytest.fixture(scope="module")
+def repository_plugin_with_wheel(tmp_path_factory):
+    user_base = str(tmp_path_factory.mktemp("user_base"))
+    install_wheel(user_base)
+    return plugin_env(tmp_path_factory, os.environ["SNAKEGRID_PLUGIN_REPOSITORY_ZIP"],
+                      user_base)
+
+
+def qgis_process(env, *arguments):
+    return subprocess.run(["/usr/bin/qgis_process.bin", *arguments], env=env,
+                          capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.parametrize("plugin", ["offline_plugin", "repository_plugin_with_wheel"])
+def test_qgis_process_runs_the_algorithm(plugin, request, cli_layout, tmp_path):
+    env = request.getfixturevalue(plugin)
+    out, outline = str(tmp_path / "grid.gpkg"), str(tmp_path / "outline.gpkg")
+    done = qgis_process(env, "run", "snakegrid:gridmap", "--", f"INPUT={US_STATES}",
+                        "ID_FIELD=id", "LABEL_FIELD=abbr", "MAX_STEPS=30", f"OUTPUT={out}",
+                        f"OUTLINE={outline}")
     assert done.returncode == 0, done.stdout + done.stderr
     assert re.search(r"C_ADJACENT:\s+0\.\d+", done.stdout)
     assert layout(out) == cli_layout
     assert QgsVectorLayer(outline, "outline", "ogr").featureCount() == 1
 
 
-def test_qgis_process_lists_and_helps(installed_plugin):
-    help_text = subprocess.run(
-        ["/usr/bin/qgis_process.bin", "help", "snakegrid:gridmap"],
-        env=installed_plugin, capture_output=True, text=True, check=True).stdout
-    assert "snake model" in help_text and "max_steps" in help_text
+def test_qgis_process_lays_out_the_antimeridian_layer_as_the_command_line(
+        offline_plugin, tmp_path):
+    out = str(tmp_path / "grid.gpkg")
+    done = qgis_process(offline_plugin, "run", "snakegrid:gridmap", "--",
+                        f"INPUT={ANTIMERIDIAN}", "ID_FIELD=code", f"OUTPUT={out}")
+    assert done.returncode == 0, done.stdout + done.stderr
+    expected = cli(str(tmp_path / "cli.gpkg"), ANTIMERIDIAN, id_field="code")
+    assert layout(out, "code") == layout(expected, "code")
+
+
+def test_qgis_process_help_is_plain_text(offline_plugin):
+    done = qgis_process(offline_plugin, "help", "snakegrid:gridmap")
+    assert done.returncode == 0
+    assert "snake model" in done.stdout and "MAX_STEPS" in done.stdout
+    assert not re.search(r"<(p|b|i|ul|li)>", done.stdout)
+
+
+def test_qgis_process_without_the_package_says_how_to_install_it(
+        repository_plugin_without_wheel, tmp_path):
+    from snakegrid_qgis import library
+
+    command = f"{PYTHON} -m pip install --user --break-system-packages {library.wheel_name()}"
+    helped = qgis_process(repository_plugin_without_wheel, "help", "snakegrid:gridmap")
+    assert command in helped.stdout
+    done = qgis_process(repository_plugin_without_wheel, "run", "snakegrid:gridmap", "--",
+                        f"INPUT={US_STATES}", f"OUTPUT={tmp_path / 'grid.gpkg'}")
+    assert done.returncode != 0
+    assert command in done.stdout + done.stderr
+
+
+# --- the repository build ---------------------------------------------------------------------
+
+#: First bytes of compiled files: ELF, PE (MZ), Mach-O (both byte orders, 32 and 64 bit, fat).
+MAGIC = (b"\x7fELF", b"MZ", b"\xfe\xed\xfa\xce", b"\xfe\xed\xfa\xcf", b"\xce\xfa\xed\xfe",
+         b"\xcf\xfa\xed\xfe", b"\xca\xfe\xba\xbe")
+COMPILED = (".so", ".dll", ".dylib", ".pyd", ".pyc", ".pyo", ".exe")
+#: What plugins.qgis.org requires in metadata.txt (and what we promise: tags, homepage).
+REQUIRED = ("name", "qgisMinimumVersion", "description", "about", "version", "author", "email",
+            "repository", "tracker", "homepage", "tags", "changelog")
+
+
+def test_the_repository_build_is_pure_python_with_complete_metadata():
+    with zipfile.ZipFile(os.environ["SNAKEGRID_PLUGIN_REPOSITORY_ZIP"]) as z:
+        names = z.namelist()
+        assert all(n.startswith("snakegrid_qgis/") for n in names)
+        for name in names:
+            assert not name.lower().endswith(COMPILED), name
+            assert not z.read(name).startswith(MAGIC), name
+        metadata = configparser.ConfigParser(interpolation=None)
+        metadata.read_string(z.read("snakegrid_qgis/metadata.txt").decode("utf-8"))
+        licence = z.read("snakegrid_qgis/LICENSE").decode("utf-8")
+    general = metadata["general"]
+    for field in REQUIRED:
+        assert general.get(field, "").strip(), f"metadata.txt lacks {field}"
+    assert "example.org" not in str(dict(general))
+    assert os.path.basename(WHEEL) in general["about"]
+    assert general["version"] in os.path.basename(WHEEL)
+    assert licence.startswith("MIT License")

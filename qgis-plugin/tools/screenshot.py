@@ -10,9 +10,11 @@ import sys
 from unittest import mock
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path[:0] = [os.path.join(ROOT, "qgis-plugin"), "/usr/share/qgis/python/plugins"]
-os.environ.setdefault(
-    "SNAKEGRID_LIBRARY", os.path.join(ROOT, "target", "release", "libsnakegrid.so"))
+# The package from the source tree, with the library scripts/build-wheel.sh builds.
+sys.path[:0] = [os.path.join(ROOT, "qgis-plugin"), os.path.join(ROOT, "python"),
+                "/usr/share/qgis/python/plugins"]
+os.environ.setdefault("SNAKEGRID_LIBRARY", os.path.join(
+    ROOT, "target", "x86_64-unknown-linux-gnu", "release", "libsnakegrid.so"))
 DATA = os.environ.get("SNAKEGRID_DATA_DIR", os.path.join(os.path.dirname(ROOT), "shared", "data"))
 from qgis.core import QgsApplication, QgsVectorLayer, QgsProject
 from qgis.PyQt.QtCore import QTimer
@@ -20,7 +22,7 @@ app = QgsApplication([], True)
 app.initQgis()
 from processing.core.Processing import Processing
 Processing.initialize()
-from snakegrid.provider import SnakegridProvider
+from snakegrid_qgis.provider import SnakegridProvider
 provider = SnakegridProvider()
 QgsApplication.processingRegistry().addProvider(provider)
 layer = QgsVectorLayer(os.path.join(DATA, "us_states.gpkg"), "us_states", "ogr")

@@ -1,0 +1,27 @@
+"""snakegrid: grid maps (tile maps) from polygon layers, by the snake model.
+
+    import snakegrid
+    grid = snakegrid.layout(geometries, ids, alpha=2)      # shapely or WKB, planar
+    grid.cells[0].fields["grid_col"], grid.metrics.adjacent, grid.notes
+
+A binding over the library's C API (include/snakegrid.h) with ctypes. The parameter table,
+the working-CRS rule, the input checks and the added fields all come from the library.
+"""
+
+from ._library import Cancelled, LibraryError, SnakegridError, library_path, load
+from .crs import WorkingCrs, working_crs
+from .layout import (
+    Cell, Field, GridMap, LayoutMetrics, RegionMetrics, fields, id_text, layout, score)
+from .options import Option, check_options, options
+
+
+def library_version():
+    """The version of the library loaded ("MAJOR.MINOR.PATCH")."""
+    return load().version
+
+
+__all__ = [
+    "Cancelled", "Cell", "Field", "GridMap", "LayoutMetrics", "LibraryError", "Option",
+    "RegionMetrics", "SnakegridError", "WorkingCrs", "check_options", "fields", "id_text",
+    "layout", "library_path", "library_version", "load", "options", "score", "working_crs",
+]

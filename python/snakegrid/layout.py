@@ -1,0 +1,206 @@
+"""Laying regions out as a grid map (snakegrid_run) and scoring a layout (snakegrid_score).
+
+Regions go in as (id, geometry) with the command line's per-feature checks and messages
+(snakegrid_regions_add_feature); cells come out with every field the library says a grid layer
+adds (snakegrid_field_info), so names, types and values are the command line's.
+"""
+
+import ctypes
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, Dict, List
+
+from . import _abi, _geometry, _library
+from .options import set_options
+
+
+def _dataclass_of(struct, doc):
+    """A frozen dataclass with the fields of a ctypes mirror, so that a field the C struct gains
+    needs no second edit here."""
+    kinds = {ctypes.c_double: float, ctypes.c_size_t: int, ctypes.c_uint32: int}
+    made = dataclasses.make_dataclass(
+        struct.__name__, [(name, kinds[kind]) for name, kind in struct._fields_], frozen=True)
+    made.__doc__ = doc
+    made.__module__ = __name__
+    return made
+
+
+RegionMetrics = _dataclass_of(
+    _abi.RegionMetrics, "How well one region is placed (snakegrid_region_metrics).")
+LayoutMetrics = _dataclass_of(
+    _abi.LayoutMetrics, "The layout's metrics, method.md section 8 (snakegrid_layout_metrics).")
+
+
+def _copy(made, struct):
+    return made(*(getattr(struct, name) for name, _ in struct._fields_))
+
+
+@dataclass(frozen=True)
+class Field:
+    """A field a grid layer adds: its name, whether it holds whole numbers, what it means."""
+
+    name: str
+    integer: bool
+    description: str
+
+
+def fields(library=None):
+    """The fields a grid layer adds after the source's, in order (grid_col, grid_row, ...)."""
+    lib = library or _library.load()
+    out = []
+    for index in range(lib.c.snakegrid_field_count()):
+        row = _abi.Field()
+        lib.check(lib.c.snakegrid_field_info(index, ctypes.byref(row)))
+        out.append(Field(row.name.decode(), row.integer, row.description.decode()))
+    return out
+
+
+@dataclass
+class Cell:
+    """Region `id`'s square (a shapely Polygon, or WKB when the regions were given as WKB), its
+    added fields {name: value} in the library's order, and its metrics."""
+
+    id: str
+    geometry: Any
+    fields: Dict[str, Any]
+    metrics: Any  # RegionMetrics
+
+
+@dataclass
+class GridMap:
+    """A finished run: `cells[i]` belongs to the i-th region given. `notes` are the library's
+    notes for the user (e.g. that an invalid polygon was repaired)."""
+
+    cells: List[Cell]
+    cell_size: float
+    metrics: Any  # LayoutMetrics
+    moved_outline: Any
+    notes: List[str]
+
+    def table(self):
+        """The cells as columns, {"id": [...], <each added field>: [...], "geometry": [...]},
+        which geopandas.GeoDataFrame and pandas.DataFrame take as they are."""
+        columns = {"id": [cell.id for cell in self.cells]}
+        for name in self.cells[0].fields if self.cells else ():
+            columns[name] = [cell.fields[name] for cell in self.cells]
+        columns["geometry"] = [cell.geometry for cell in self.cells]
+        return columns
+
+
+def id_text(value):
+    """A region id as the library takes it: None for a missing value (None, NaN, pandas' NA),
+    a float that is a whole number without its ".0" (pandas reads an integer column with
+    missing values as floats; GDAL, and so the command line, writes 6.0 as "6"), else str()."""
+    if value is None or type(value).__name__ == "NAType" or value != value:
+        return None
+    if isinstance(value, float) and value.is_integer():
+        return str(int(value))
+    return str(value)
+
+
+def _add_features(lib, handle, geometries, ids, labels):
+    """Adds every feature with the command line's checks; `labels` name them in messages until
+    their ids are known (default "index k")."""
+    geometries = list(geometries)
+    ids = [str(k) for k in range(len(geometries))] if ids is None else list(ids)
+    labels = [f"index {k}" for k in range(len(geometries))] if labels is None else list(labels)
+    if not len(ids) == len(labels) == len(geometries):
+        raise ValueError(
+            f"{len(geometries)} geometries, {len(ids)} ids and {len(labels)} labels: give one "
+            "of each per region")
+    for geometry, region_id, label in zip(geometries, ids, labels):
+        wkb = _geometry.to_wkb(geometry)
+        region_id = id_text(region_id)
+        lib.check(lib.c.snakegrid_regions_add_feature(
+            handle, str(label).encode(), None if region_id is None else region_id.encode(),
+            wkb, 0 if wkb is None else len(wkb)))
+    return geometries
+
+
+def layout(geometries, ids=None, *, labels=None, progress=None, library=None, **options):
+    """Lays out regions as a grid map: one square cell per region.
+
+    `geometries`: shapely polygons or multipolygons, or their WKB, in a planar CRS (project a
+    lon/lat layer first, e.g. to working_crs(...)). `ids`: one unique id per region (default
+    the positions). `options`: the method's parameters by name (see options()), e.g.
+    ``alpha=2, refine=False, shifts=[(0, 0), (0.5, 0.5)]``. `progress(fraction, message)` is
+    called during the run, possibly from another thread; returning False cancels the run,
+    which then raises Cancelled. Bad input or options raise SnakegridError with the library's
+    message, which names the region or option.
+    """
+    lib = library or _library.load()
+    callback_error = []
+
+    def report(fraction, message, _user_data):
+        try:
+            go_on = progress(fraction, message.decode("utf-8", "replace"))
+        except BaseException as e:  # never let an exception unwind into the library
+            callback_error.append(e)
+            return 1
+        return 1 if go_on is False else 0
+
+    # The ctypes callback must outlive the run: it is kept in this frame.
+    c_progress = _abi.PROGRESS(report) if progress else _abi.PROGRESS()
+    with lib.handle("regions") as regions, lib.handle("options") as handle:
+        geometries = _add_features(lib, regions, geometries, ids, labels)
+        set_options(lib, handle, options)
+        result = ctypes.c_void_p()
+        status = lib.c.snakegrid_run(regions, handle, c_progress, None, ctypes.byref(result))
+        try:
+            if callback_error:
+                raise callback_error[0]
+            lib.check(status)
+            as_shapely = bool(geometries) and not _geometry.is_wkb(geometries[0])
+            return _read(lib, result, as_shapely)
+        finally:
+            lib.c.snakegrid_result_free(result)
+
+
+def _read(lib, result, as_shapely):
+    c = lib.c
+    count, size = ctypes.c_size_t(), ctypes.c_double()
+    lib.check(c.snakegrid_result_count(result, ctypes.byref(count)))
+    lib.check(c.snakegrid_result_cell_size(result, ctypes.byref(size)))
+    layout_metrics = _abi.LayoutMetrics()
+    lib.check(c.snakegrid_result_layout_metrics(result, ctypes.byref(layout_metrics)))
+    added = fields(lib)
+    cells = []
+    value = ctypes.c_double()
+    for i in range(count.value):
+        metrics = _abi.RegionMetrics()
+        lib.check(c.snakegrid_result_region_metrics(result, i, ctypes.byref(metrics)))
+        values = {}
+        for f, field in enumerate(added):
+            lib.check(c.snakegrid_result_field(result, i, f, ctypes.byref(value)))
+            values[field.name] = int(value.value) if field.integer else value.value
+        cells.append(Cell(
+            id=lib.text(c.snakegrid_result_region_id, result, i),
+            geometry=_geometry.from_wkb(lib.bytes(c.snakegrid_result_cell_wkb, result, i),
+                                        as_shapely),
+            fields=values,
+            metrics=_copy(RegionMetrics, metrics)))
+    notes_count = ctypes.c_size_t()
+    lib.check(c.snakegrid_result_note_count(result, ctypes.byref(notes_count)))
+    return GridMap(
+        cells=cells,
+        cell_size=size.value,
+        metrics=_copy(LayoutMetrics, layout_metrics),
+        moved_outline=_geometry.from_wkb(
+            lib.bytes(c.snakegrid_result_moved_outline_wkb, result), as_shapely),
+        notes=[lib.text(c.snakegrid_result_note, result, i) for i in range(notes_count.value)])
+
+
+def score(regions, region_ids, cells, cell_ids, *, region_labels=None, cell_labels=None,
+          library=None):
+    """Scores a layout made elsewhere (a grid layer edited by hand): `cells` holds one square
+    per region under the region's id, in the regions' planar CRS. Returns the LayoutMetrics and
+    one RegionMetrics per region, in the order of `regions`."""
+    lib = library or _library.load()
+    with lib.handle("regions") as region_handle, lib.handle("regions") as cell_handle:
+        regions = _add_features(lib, region_handle, regions, region_ids, region_labels)
+        _add_features(lib, cell_handle, cells, cell_ids, cell_labels)
+        layout_metrics = _abi.LayoutMetrics()
+        per_region = (_abi.RegionMetrics * len(regions))()
+        lib.check(lib.c.snakegrid_score(
+            region_handle, cell_handle, ctypes.byref(layout_metrics), per_region, len(regions)))
+    return _copy(LayoutMetrics, layout_metrics), [_copy(RegionMetrics, m) for m in per_region]

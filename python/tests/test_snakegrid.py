@@ -1,0 +1,185 @@
+"""The installed snakegrid package against the command line: same cells and fields, the same
+parameter table, the same messages, the same working CRS."""
+
+import csv
+import os
+import re
+import subprocess
+import sys
+
+import pyogrio
+import pytest
+import shapely
+
+import snakegrid
+
+from conftest import BAD, CLI, ROOT, US_STATES, cells_of, cli_grid, python_cells, squares_wkb
+
+
+@pytest.fixture(scope="module")
+def us_states():
+    return pyogrio.read_dataframe(US_STATES)
+
+
+def test_us_states_gives_the_command_line_cells_and_fields(us_states, us_states_cli):
+    grid = snakegrid.layout(us_states.geometry, us_states["id"])
+    assert python_cells(grid) == cells_of(us_states_cli)
+    names = [f.name for f in snakegrid.fields()]
+    assert names == list(us_states_cli.columns[-len(names) - 1:-1])  # before the geometry
+    cli = us_states_cli.set_index("id")
+    for cell in grid.cells:
+        assert list(cell.fields) == names
+        for name, value in cell.fields.items():
+            assert value == pytest.approx(cli.loc[cell.id, name], abs=1e-9), (cell.id, name)
+        assert isinstance(cell.geometry, shapely.Polygon)
+        assert cell.geometry.equals_exact(cli.loc[cell.id, "geometry"], 1e-6)
+    assert isinstance(grid.moved_outline, shapely.MultiPolygon)
+    table = grid.table()
+    assert list(table) == ["id", *names, "geometry"] and len(table["id"]) == len(us_states)
+
+
+def test_options_are_the_command_line_parameters():
+    help_text = subprocess.run([CLI, "--help"], check=True, capture_output=True,
+                               text=True).stdout
+    listed = {name: (text, default) for name, text, default in re.findall(
+        r"--(\w+) <VALUE>\n\s+(.*?) \[default: ([^\]]*)\]", help_text, re.S)}
+    table = snakegrid.options()
+    assert [o.name for o in table] == list(listed)
+    for option in table:
+        text, default = listed[option.name]
+        unit = f", {option.unit}" if option.unit else ""
+        assert " ".join(text.split()) == f"{option.summary}; {option.range}{unit}", option.name
+        assert default == option.default, option.name
+
+
+def test_options_are_checked_by_the_library_naming_the_option():
+    with pytest.raises(snakegrid.SnakegridError, match="alpha") as error:
+        snakegrid.layout(squares_wkb(4), alpha=1e308)
+    assert error.value.status == 5  # SNAKEGRID_INVALID_OPTION
+
+
+def test_a_64_bit_seed_and_lists_are_accepted():
+    grid = snakegrid.layout(squares_wkb(6), seed=2**64 - 1, shifts=[(0, 0), (0.5, 0.5)],
+                            noise_levels=[0.02], refine=False)
+    assert len(grid.cells) == 6
+
+
+def test_wkb_in_gives_wkb_out_without_shapely():
+    # A fresh interpreter: importing the package and laying out WKB never imports shapely.
+    code = (
+        "import sys, snakegrid\n"
+        "from conftest import squares_wkb\n"
+        "grid = snakegrid.layout(squares_wkb(9), [f'r{k}' for k in range(9)])\n"
+        "assert all(isinstance(c.geometry, bytes) for c in grid.cells)\n"
+        "assert 'shapely' not in sys.modules, 'shapely was imported'\n"
+        "print(sorted(c.fields['grid_col'] for c in grid.cells))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=os.path.dirname(__file__))
+    assert done.returncode == 0, done.stderr
+    # A 3 x 3 block of squares is already a grid map.
+    assert done.stdout.strip() == "[0, 0, 0, 1, 1, 1, 2, 2, 2]"
+
+
+def test_progress_names_stages_and_false_cancels():
+    seen = []
+    snakegrid.layout(squares_wkb(9), progress=lambda f, m: seen.append((f, m)))
+    fractions = [f for f, _ in seen]
+    assert fractions == sorted(fractions) and fractions[-1] == pytest.approx(1.0)
+    assert all(m for _, m in seen)
+    calls = []
+
+    def stop(fraction, message):
+        calls.append(fraction)
+        return False
+
+    with pytest.raises(snakegrid.Cancelled):
+        snakegrid.layout(squares_wkb(9), progress=stop)
+    assert len(calls) == 1  # the library calls no more once told to stop
+
+
+def test_an_exception_in_the_callback_stops_the_run_and_is_raised():
+    def broken(fraction, message):
+        raise KeyError("from the callback")
+
+    with pytest.raises(KeyError, match="from the callback"):
+        snakegrid.layout(squares_wkb(4), progress=broken)
+
+
+def bad_cases():
+    with open(os.path.join(BAD, "cases.tsv"), encoding="utf-8") as f:
+        rows = [r for r in csv.reader(f, delimiter="\t") if r and not r[0].startswith("#")]
+    # GDAL's C API hands the command line GeoJSON's empty coordinates as a null geometry,
+    # pyogrio as an empty one: the library names each as it is given, so the texts differ.
+    return [r for r in rows
+            if r[2] == "invalid_input" and r[1] != "-" and r[0] != "empty_geometry.geojson"]
+
+
+@pytest.mark.parametrize("case", bad_cases(), ids=lambda r: r[0])
+def test_bad_input_gives_the_command_line_message(case, tmp_path):
+    name, id_field, _, expected = case
+    path = os.path.join(BAD, name)
+    done = subprocess.run([CLI, "-q", "--id", id_field, str(tmp_path / "o.gpkg"), path],
+                          capture_output=True, text=True)
+    cli_message = done.stderr.strip().removeprefix("snakegrid: ERROR: ")
+    assert done.returncode == 1 and expected in cli_message
+    # As a host reads a layer: null geometries as None, features named by FID.
+    frame = pyogrio.read_dataframe(path, fid_as_index=True)
+    with pytest.raises(snakegrid.SnakegridError) as error:
+        snakegrid.layout(list(frame.geometry), list(frame[id_field]),
+                         labels=[f"FID {fid}" for fid in frame.index])
+    assert str(error.value).split(": ", 1)[1] == cli_message
+
+
+def test_notes_say_what_the_library_repaired():
+    frame = pyogrio.read_dataframe(os.path.join(BAD, "bowtie.geojson"))
+    grid = snakegrid.layout(list(frame.geometry), list(frame["code"]))
+    assert any("feature bowtie: invalid polygon repaired" in n for n in grid.notes), grid.notes
+
+
+def test_working_crs_is_the_command_lines(tmp_path):
+    # A lon/lat layer across the antimeridian: the CLI projects it by the same rule, and its
+    # output's CRS carries the name.
+    path = os.path.join(BAD, "antimeridian.geojson")
+    frame = pyogrio.read_dataframe(path)
+    crs = snakegrid.working_crs(frame.geometry)
+    out = str(tmp_path / "am.gpkg")
+    subprocess.run([CLI, "-q", "--id", "code", out, path], check=True)
+    # pyogrio gives the output's CRS as WKT1 (the GeoPackage's definition).
+    assert pyogrio.read_info(out)["crs"].startswith(f'PROJCS["{crs.name}"')
+    assert crs.note and crs.wkt.startswith("PROJCRS[")
+    # Boxes work as well as geometries; one box for the whole layer would centre it on 0°.
+    assert snakegrid.working_crs([g.bounds for g in frame.geometry]) == crs
+    assert snakegrid.working_crs([frame.total_bounds]).name != crs.name
+
+
+def test_working_crs_refuses_what_cannot_be_degrees():
+    with pytest.raises(snakegrid.SnakegridError, match="not longitudes and latitudes"):
+        snakegrid.working_crs([(1e5, 1e5, 2e5, 2e5)])
+
+
+def test_snakegrid_library_names_the_library(monkeypatch, tmp_path):
+    wheel_library = snakegrid.load().path
+    missing = str(tmp_path / "libsnakegrid.so")
+    monkeypatch.setenv("SNAKEGRID_LIBRARY", missing)
+    assert snakegrid.library_path() == missing
+    with pytest.raises(snakegrid.LibraryError, match=re.escape(missing)):
+        snakegrid.load()
+    monkeypatch.setenv("SNAKEGRID_LIBRARY", wheel_library)
+    assert snakegrid.load().path == wheel_library
+
+
+def test_the_readme_example_runs_as_written_and_matches_the_command_line(tmp_path):
+    readme = open(os.path.join(ROOT, "README.md"), encoding="utf-8").read()
+    section = readme.split("## Python", 1)[1]
+    example = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    os.symlink(os.path.join(ROOT, "data"), tmp_path / "data")
+    (tmp_path / "out").mkdir()
+    done = subprocess.run([sys.executable, "-c", example], cwd=tmp_path, capture_output=True,
+                          text=True)
+    assert done.returncode == 0, done.stderr
+    written = pyogrio.read_dataframe(str(tmp_path / "out" / "us_grid.gpkg"))
+    # The example projects us_states to lon/lat first, as a user's layer would be: the
+    # command line on that layer must agree.
+    lonlat = str(tmp_path / "us_states_4326.gpkg")
+    pyogrio.write_dataframe(pyogrio.read_dataframe(US_STATES).to_crs("EPSG:4326"), lonlat)
+    assert cells_of(written) == cells_of(cli_grid(str(tmp_path / "cli.gpkg"), lonlat))

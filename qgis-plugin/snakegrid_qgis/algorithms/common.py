@@ -1,0 +1,228 @@
+"""What the two algorithms share: the package, reading a layer's features for the library, the
+working CRS, progress and cancelling, and writing the fields the library lists. The policy
+(checks and messages, CRS rule, field names) is the library's; this module only carries it
+into QGIS."""
+
+import os
+
+from qgis.core import (
+    QgsCoordinateReferenceSystem,
+    QgsCoordinateTransform,
+    QgsCsException,
+    QgsFeatureRequest,
+    QgsField,
+    QgsFields,
+    QgsGeometry,
+    QgsProcessingAlgorithm,
+    QgsProcessingException,
+    QgsProcessingFeatureSource,
+    QgsProcessingOutputNumber,
+)
+from qgis.PyQt.QtCore import QVariant
+from qgis.PyQt.QtGui import QIcon
+
+from .. import library
+
+ICON = os.path.join(os.path.dirname(os.path.dirname(__file__)), "icon.svg")
+HELP_URL = f"{library.HOME}/blob/main/docs/qgis-plugin.md"
+
+#: The four layout metrics (method.md section 8) as numeric outputs: output name, label,
+#: snakegrid.LayoutMetrics attribute.
+LAYOUT_OUTPUTS = [
+    ("C_LOCATION", "C_location: mean distance region to cell, cells (lower is better)",
+     "location"),
+    ("C_ADJACENT", "C_adjacent: share of neighbour pairs kept (higher is better)", "adjacent"),
+    ("C_ORIENTATION", "C_orientation: mean direction error, degrees (lower is better)",
+     "orientation"),
+    ("C_SHAPE", "C_shape: outline similarity, 0-1 (higher is better)", "shape"),
+]
+
+
+class Cancelled(Exception):
+    """The user cancelled: the algorithm returns no outputs, which QGIS does not show as a
+    failure (raising QgsProcessingException would print "Execution failed" in red)."""
+
+
+class SnakegridAlgorithm(QgsProcessingAlgorithm):
+    """What every snakegrid algorithm does alike."""
+
+    def group(self):
+        return "Grid maps"
+
+    def groupId(self):  # noqa: N802 (QGIS's names throughout)
+        return "gridmaps"
+
+    def tags(self):
+        return ["grid map", "tile map", "cartogram", "hexagon", "square", "tessellation",
+                "snake model", "equal area"]
+
+    def icon(self):
+        return QIcon(ICON)
+
+    def svgIconPath(self):
+        return ICON
+
+    def helpUrl(self):
+        return HELP_URL
+
+    def canExecute(self):
+        # QGIS shows this message in the dialog instead of running.
+        message = library.problem()
+        return (False, message) if message else (True, "")
+
+    def processAlgorithm(self, parameters, context, feedback):
+        sg = library.package()
+        try:
+            return self.process(sg, parameters, context, feedback)
+        except (Cancelled, sg.Cancelled):
+            feedback.pushWarning("Cancelled")
+            return {}
+        except sg.SnakegridError as e:
+            raise QgsProcessingException(str(e)) from e
+
+
+def add_layout_outputs(algorithm):
+    for name, label, _ in LAYOUT_OUTPUTS:
+        algorithm.addOutput(QgsProcessingOutputNumber(name, label))
+
+
+def layout_results(metrics, feedback):
+    """The numeric outputs of `metrics`, also logged."""
+    results = {}
+    for name, label, attribute in LAYOUT_OUTPUTS:
+        results[name] = getattr(metrics, attribute)
+        feedback.pushInfo(f"{label}: {results[name]:.4f}")
+    return results
+
+
+def grid_fields(source_fields, added):
+    """The source's fields, then `added` (snakegrid.Field rows); a source field of the same name
+    (a grid layer made or scored again) gives way to the new one. Returns the fields and the
+    indices of the source fields kept."""
+    names = {field.name.lower() for field in added}
+    fields = QgsFields()
+    kept = []
+    for i, field in enumerate(source_fields):
+        if field.name().lower() not in names:
+            fields.append(field)
+            kept.append(i)
+    for field in added:
+        kind = QVariant.Int if field.integer else QVariant.Double
+        fields.append(QgsField(field.name, kind, comment=field.description))
+    return fields, kept
+
+
+def _id(value):
+    """An attribute as the package takes an id: None for QGIS's NULL, else the value (the
+    package writes whole floats as the command line does)."""
+    if value is None or (hasattr(value, "isNull") and value.isNull()):
+        return None
+    return value
+
+
+class Features:
+    """The features of a source as the library takes them: ids (the id field's values, else the
+    feature ids, as on the command line), labels naming them ("FID 3") and their geometries.
+    The library checks each one (snakegrid.layout and .score), with the command line's
+    messages."""
+
+    def __init__(self, source, id_field, feedback, progress_to):
+        self.crs = source.sourceCrs()
+        self.fields = source.fields()
+        id_index = self.fields.lookupField(id_field) if id_field else -1
+        self.features, self.ids, self.labels, self.geometries = [], [], [], []
+        total = max(source.featureCount(), 1)
+        # The library checks and repairs geometries as the command line does (a bow-tie is
+        # repaired with a note): QGIS's own validity check would refuse them first.
+        features = source.getFeatures(
+            QgsFeatureRequest(), QgsProcessingFeatureSource.FlagSkipGeometryValidityChecks)
+        for n, feature in enumerate(features):
+            if feedback.isCanceled():
+                raise Cancelled()
+            self.features.append(feature)
+            self.ids.append(
+                _id(feature.attribute(id_index)) if id_index >= 0 else str(feature.id()))
+            self.labels.append(f"FID {feature.id()}")
+            geometry = feature.geometry()
+            self.geometries.append(None if geometry.isNull() else geometry)
+            feedback.setProgress(progress_to * (n + 1) / total)
+
+    def boxes(self):
+        """Each region's extent in the source CRS, for the working-CRS rule."""
+        return [(b.xMinimum(), b.yMinimum(), b.xMaximum(), b.yMaximum())
+                for b in (g.boundingBox() for g in self.geometries
+                          if g is not None and not g.isEmpty())]
+
+    def wkb(self, crs, context):
+        """The geometries in `crs` as WKB (None for a null geometry)."""
+        transform = None
+        if self.crs.isValid() and crs.isValid() and crs != self.crs:
+            transform = QgsCoordinateTransform(self.crs, crs, context.transformContext())
+        out = []
+        for label, geometry in zip(self.labels, self.geometries):
+            if geometry is not None and transform is not None:
+                geometry = QgsGeometry(geometry)
+                try:
+                    geometry.transform(transform)
+                except QgsCsException as e:
+                    raise QgsProcessingException(
+                        f"feature {label}: cannot project the geometry to "
+                        f"{crs.description()}: {e}") from e
+            out.append(None if geometry is None else bytes(geometry.asWkb()))
+        return out
+
+
+def working_crs(sg, features, target, feedback):
+    """The CRS to lay out in, as the command line's -t_srs decides: `target` when valid, else
+    the layer's own when projected, else the library's equal-area rule for the features'
+    extents, made from its named WKT2 (QGIS then shows its name; nothing is saved to the
+    user's CRS database)."""
+    source = features.crs
+    if target.isValid():
+        if not source.isValid():
+            raise QgsProcessingException(
+                f"The layer has no CRS, so it cannot be projected to {target.authid()}.")
+        if target.isGeographic():
+            feedback.pushWarning(
+                f"The target CRS {target.authid()} is geographic: the cells are squares in "
+                "degrees.")
+        return target
+    if not source.isValid():
+        feedback.pushWarning("The layer has no CRS: its coordinates are taken as planar.")
+        return source
+    if not source.isGeographic():
+        return source
+    chosen = sg.working_crs(features.boxes())
+    crs = QgsCoordinateReferenceSystem.fromWkt(chosen.wkt)
+    if not crs.isValid():
+        raise QgsProcessingException(f"QGIS cannot read the working CRS {chosen.wkt}")
+    feedback.pushInfo(
+        f"The layer's CRS {source.authid() or source.description()} is geographic: "
+        f"{chosen.note}.")
+    return crs
+
+
+def geometry_from_wkb(wkb):
+    geometry = QgsGeometry()
+    geometry.fromWkb(wkb)
+    return geometry
+
+
+class Progress:
+    """The library's progress callback driving a QgsProcessingFeedback between two percentages,
+    with each named stage as the progress text (which the log shows); answers "stop" once the
+    user cancels. The library calls it from worker threads, one call at a time;
+    QgsProcessingFeedback may be updated from any thread."""
+
+    def __init__(self, feedback, start, end):
+        self.feedback, self.start, self.end = feedback, start, end
+        self.message = None
+
+    def __call__(self, fraction, message):
+        if self.feedback.isCanceled():
+            return False
+        self.feedback.setProgress(self.start + (self.end - self.start) * fraction)
+        if message != self.message:
+            self.message = message
+            self.feedback.setProgressText(message)
+        return True

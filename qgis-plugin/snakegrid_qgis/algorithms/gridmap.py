@@ -1,0 +1,195 @@
+"""Grid map (snake model): a polygon layer in, one square cell per region out."""
+
+from qgis.core import (
+    QgsFeature,
+    QgsFeatureSink,
+    QgsField,
+    QgsFields,
+    QgsPalLayerSettings,
+    QgsProcessing,
+    QgsProcessingException,
+    QgsProcessingLayerPostProcessorInterface,
+    QgsProcessingParameterCrs,
+    QgsProcessingParameterFeatureSink,
+    QgsProcessingParameterFeatureSource,
+    QgsProcessingParameterField,
+    QgsVectorLayerSimpleLabeling,
+    QgsWkbTypes,
+)
+from qgis.PyQt.QtCore import QVariant
+
+from .. import library
+from . import common, parameters
+
+INPUT, ID_FIELD, LABEL_FIELD, TARGET_CRS, OUTPUT, OUTLINE = (
+    "INPUT", "ID_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT", "OUTLINE")
+
+ABOUT = """\
+Makes a grid map (tile map): one equal square cell per region, placed so that cells stay near \
+their regions, neighbours stay neighbours, directions hold and the whole keeps the map's outline.
+The method (the snake model of Wei, Yang, Xu and Ding, 2024): the region centroids and the map \
+outline form a network of elastic beams; forces pull the centroids towards an even spacing of \
+one cell while the beams keep the network's shape (the Snake). A square lattice is then fitted \
+to the moved outline and every region gets a cell by an optimal assignment, which an \
+adjacency-aware refinement improves; several candidates (lattice shifts, noisy starts) are made \
+this way and ranked by their metrics.
+INPUT: polygons, any source QGIS reads (tick Selected features only to use a selection).
+ID_FIELD: unique region id (default: the feature id). LABEL_FIELD: a short name used to label \
+the cells when the output is loaded (default: abbr, else name, if present).
+TARGET_CRS: the working and output CRS, as the command line's -t_srs (default: the layer's CRS \
+when it is projected, else an equal-area CRS centred on the layer, chosen by the library).
+OUTPUT: one square per region with every source field and {fields}.
+OUTLINE (optional): the map outline after the Snake, which the lattice was fitted to.
+Numeric outputs, the layout metrics: {metrics}.
+Method parameters (lengths in cells):
+{parameters}"""
+
+
+def _options():
+    """The library's parameter table, or [] while the package is missing (the algorithm then
+    only says how to install it)."""
+    if library.problem():
+        return []
+    import snakegrid
+
+    return snakegrid.options()
+
+
+class LabelCells(QgsProcessingLayerPostProcessorInterface):
+    """Labels the cells of the loaded grid layer with the short label field."""
+
+    # QGIS does not own post-processors made in Python: keep the live one referenced.
+    current = None
+
+    def __init__(self, field):
+        super().__init__()
+        self.field = field
+
+    def postProcessLayer(self, layer, context, feedback):  # noqa: N802 (QGIS's name)
+        settings = QgsPalLayerSettings()
+        settings.fieldName = self.field
+        settings.placement = QgsPalLayerSettings.OverPoint
+        layer.setLabeling(QgsVectorLayerSimpleLabeling(settings))
+        layer.setLabelsEnabled(True)
+        layer.triggerRepaint()
+
+    @classmethod
+    def create(cls, field):
+        cls.current = cls(field)
+        return cls.current
+
+
+class GridMapAlgorithm(common.SnakegridAlgorithm):
+    def __init__(self):
+        super().__init__()
+        self.options = _options()
+
+    def name(self):
+        return "gridmap"
+
+    def displayName(self):  # noqa: N802 (QGIS's names throughout)
+        return "Grid map (snake model)"
+
+    def shortHelpString(self):  # noqa: N802
+        problem = library.problem()
+        if problem:
+            return problem
+        import snakegrid
+
+        return ABOUT.format(
+            fields=", ".join(f"{f.name} ({f.description})" for f in snakegrid.fields()),
+            metrics=", ".join(label for _, label, _ in common.LAYOUT_OUTPUTS),
+            parameters=parameters.help_text(self.options))
+
+    def createInstance(self):  # noqa: N802
+        return GridMapAlgorithm()
+
+    def initAlgorithm(self, config=None):  # noqa: N802
+        self.addParameter(QgsProcessingParameterFeatureSource(
+            INPUT, "Input polygon layer", [QgsProcessing.TypeVectorPolygon]))
+        self.addParameter(QgsProcessingParameterField(
+            ID_FIELD, "Id field (unique; default: the feature id)", parentLayerParameterName=INPUT,
+            optional=True))
+        self.addParameter(QgsProcessingParameterField(
+            LABEL_FIELD, "Short label field (default: abbr, else name)",
+            parentLayerParameterName=INPUT, optional=True))
+        self.addParameter(QgsProcessingParameterCrs(
+            TARGET_CRS, "Working and output CRS (default: the layer's if projected, else an "
+            "equal-area CRS centred on it)", optional=True))
+        for option in self.options:
+            self.addParameter(parameters.definition(option))
+        self.addParameter(QgsProcessingParameterFeatureSink(
+            OUTPUT, "Grid map", QgsProcessing.TypeVectorPolygon))
+        self.addParameter(QgsProcessingParameterFeatureSink(
+            OUTLINE, "Moved outline", QgsProcessing.TypeVectorPolygon, optional=True,
+            createByDefault=False))
+        common.add_layout_outputs(self)
+
+    def checkParameterValues(self, parameters_, context):  # noqa: N802
+        # The library refuses a bad value by name before any feature is read.
+        ok, message = super().checkParameterValues(parameters_, context)
+        if ok and self.options:
+            import snakegrid
+
+            try:
+                snakegrid.check_options(
+                    **parameters.values(self, self.options, parameters_, context))
+            except snakegrid.SnakegridError as e:
+                return False, str(e)
+        return ok, message
+
+    def process(self, sg, parameters_, context, feedback):
+        source = self.parameterAsSource(parameters_, INPUT, context)
+        if source is None:
+            raise QgsProcessingException(self.invalidSourceError(parameters_, INPUT))
+        id_field = self.parameterAsString(parameters_, ID_FIELD, context)
+        label_field = self.parameterAsString(parameters_, LABEL_FIELD, context)
+        target = self.parameterAsCrs(parameters_, TARGET_CRS, context)
+        options = parameters.values(self, self.options, parameters_, context)
+
+        feedback.setProgressText("reading the layer")
+        features = common.Features(source, id_field, feedback, 10.0)
+        crs = common.working_crs(sg, features, target, feedback)
+        grid = sg.layout(features.wkb(crs, context), features.ids, labels=features.labels,
+                         progress=common.Progress(feedback, 10.0, 95.0), **options)
+        for note in grid.notes:
+            feedback.pushWarning(note)
+
+        added = sg.fields()
+        fields, kept = common.grid_fields(features.fields, added)
+        sink, dest_id = self.parameterAsSink(
+            parameters_, OUTPUT, context, fields, QgsWkbTypes.Polygon, crs)
+        if sink is None:
+            raise QgsProcessingException(self.invalidSinkError(parameters_, OUTPUT))
+        for feature, cell in zip(features.features, grid.cells):
+            attributes = feature.attributes()
+            out = QgsFeature(fields)
+            out.setAttributes([attributes[i] for i in kept] + list(cell.fields.values()))
+            out.setGeometry(common.geometry_from_wkb(cell.geometry))
+            if not sink.addFeature(out, QgsFeatureSink.FastInsert):
+                raise QgsProcessingException(self.writeFeatureError(sink, parameters_, OUTPUT))
+        results = {OUTPUT: dest_id}
+
+        outline_fields = QgsFields()
+        outline_fields.append(QgsField("regions", QVariant.Int))
+        outline_sink, outline_id = self.parameterAsSink(
+            parameters_, OUTLINE, context, outline_fields, QgsWkbTypes.MultiPolygon, crs)
+        if outline_sink is not None:
+            outline = QgsFeature(outline_fields)
+            outline.setAttributes([len(grid.cells)])
+            outline.setGeometry(common.geometry_from_wkb(grid.moved_outline))
+            if not outline_sink.addFeature(outline, QgsFeatureSink.FastInsert):
+                raise QgsProcessingException(
+                    self.writeFeatureError(outline_sink, parameters_, OUTLINE))
+            results[OUTLINE] = outline_id
+
+        label = label_field or next(
+            (name for name in ("abbr", "name") if features.fields.lookupField(name) >= 0), "")
+        if label and context.willLoadLayerOnCompletion(dest_id):
+            context.layerToLoadOnCompletionDetails(dest_id).setPostProcessor(
+                LabelCells.create(label))
+        feedback.setProgress(100.0)
+        feedback.pushInfo(f"{len(grid.cells)} cells of {grid.cell_size:.6g} map units in "
+                          f"{crs.description() or 'planar coordinates'}.")
+        results.update(common.layout_results(grid.metrics, feedback))
+        return results
