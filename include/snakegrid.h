@@ -295,7 +295,7 @@ typedef struct snakegrid_option {
 typedef int (*snakegrid_progress_callback)(double fraction, const char *message, void *user_data);
 
 /**
- * How well one region is placed.
+ * Per-region quality. `repr(C)`: the C API hands it out as it is (snakegrid_region_metrics).
  */
 typedef struct snakegrid_region_metrics {
   /**
@@ -303,7 +303,8 @@ typedef struct snakegrid_region_metrics {
    */
   double displacement;
   /**
-   * Share of the region's adjacent regions whose cells touch its cell (1 when it has none).
+   * Share of the region's adjacent regions whose cells are 8-neighbours of its cell
+   * (1 when it has no neighbours).
    */
   double neighbours_kept;
   /**
@@ -313,44 +314,77 @@ typedef struct snakegrid_region_metrics {
 } snakegrid_region_metrics;
 
 /**
- * The four layout metrics of method.md section 8 and their named variants.
+ * The layout metrics of method.md §8, as the shared judge computes them. `repr(C)`: the C API
+ * hands it out as it is (snakegrid_layout_metrics).
  */
 typedef struct snakegrid_layout_metrics {
   /**
-   * C_location: mean distance, in cells, from each region's centroid to its cell centre
-   * after a least-squares scale-and-translation fit. Lower is better.
+   * C_location: mean distance from each region's area centroid to its cell's centre after
+   * the least-squares scale-and-translation fit, in fitted cells. Lower is better.
    */
   double location;
   /**
-   * The same without the fit, in map units.
+   * The 90th percentile of those distances, and the largest: the regions far from home.
+   */
+  double location_p90;
+  double location_max;
+  /**
+   * The mean distance without the fit, in map units.
    */
   double location_raw;
   /**
-   * The paper's variant: from the moved centroids, in cells, without the fit.
+   * The paper's variant: from the moved centroids, in cells of the map, without fit.
    */
   double location_moved;
   /**
-   * C_adjacent: share of adjacent region pairs whose cells touch (8-neighbourhood). Higher
-   * is better.
+   * C_adjacent: share of adjacent pairs whose cells are 8-neighbours. Higher is better.
    */
   double adjacent;
   /**
-   * Share of adjacent pairs whose cells share an edge (4-neighbourhood).
+   * Share of adjacent pairs whose cells share an edge (4-neighbours).
    */
   double adjacent_rook;
   /**
-   * C_orientation: mean angle error over adjacent pairs, degrees (0-180). Lower is better.
+   * Of the pairs of 8-neighbour cells, the share whose regions are not adjacent. Lower is
+   * better.
+   */
+  double false_neighbours;
+  /**
+   * C_orientation: mean directed angle error over adjacent pairs, degrees. Lower is better.
    */
   double orientation;
   /**
-   * Share of adjacent pairs whose direction is off by more than 45 degrees.
+   * Share of adjacent pairs whose direction is off by more than 45°.
    */
   double misdirected;
   /**
-   * C_shape: similarity of the outlines of the cells and of the regions (0-1). Higher is
-   * better.
+   * C_shape: Fourier-descriptor similarity of the outlines. Higher is better.
    */
   double shape;
+  /**
+   * The area of the regions' own holes (lakes, missing regions), in fitted cells: holes of
+   * the layout up to this many are the source's.
+   */
+  double source_holes;
+  /**
+   * Among the regions of landmasses of 3+ regions, the share whose cell lies nearer another
+   * such landmass than its own.
+   */
+  double wrong_landmass;
+  /**
+   * Edge-connected pieces of the layout, and connected parts of the regions' union. (The
+   * counts come last, four 32-bit numbers, so that the C struct has no padding.)
+   */
+  uint32_t pieces;
+  uint32_t source_pieces;
+  /**
+   * Empty cells enclosed by the layout (the area of its inner rings, in cells).
+   */
+  uint32_t holes;
+  /**
+   * Empty positions next to the layout with at most one free side (holes included).
+   */
+  uint32_t notches;
 } snakegrid_layout_metrics;
 
 /**
@@ -891,7 +925,7 @@ snakegrid_status snakegrid_crs_wkt(const struct snakegrid_crs *crs,
                                    const char **out);
 
 /**
- * The CRS's name, e.g. "Lambert azimuthal equal-area at 37.0°N 95.5°W (snakegrid)". As
+ * The CRS's name (ASCII), e.g. "Lambert azimuthal equal-area at 37.0N 95.5W (snakegrid)". As
  * snakegrid_crs_wkt().
  *
  * Thread safety: any number of threads may read one handle at once.

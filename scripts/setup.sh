@@ -24,6 +24,12 @@ fi
 
 apt-get update -qq
 apt-get install -y -qq --no-install-recommends \
-    libgdal-dev gdal-bin pkg-config cmake g++ valgrind >/dev/null
+    libgdal-dev gdal-bin pkg-config cmake g++ valgrind python3-pip >/dev/null
+# The shared judge's (../shared/eval/gridmap_eval.py) packages, for tests/judge.rs and
+# scripts/bench-quality.sh. The python3 first on PATH: on Debian's own, pip needs
+# --break-system-packages (its Python is externally managed).
+python3 -m pip install --quiet --disable-pip-version-check shapely numpy pyogrio pyproj 2>/dev/null ||
+    python3 -m pip install --quiet --disable-pip-version-check --break-system-packages \
+        shapely numpy pyogrio pyproj
 cargo build --release
 echo "snakegrid built: target/release/snakegrid, target/release/libsnakegrid.{so,a}"

@@ -226,7 +226,7 @@ fn a_layer_across_the_antimeridian_keeps_its_shape() {
     };
     let source = read_regions(&job).unwrap();
     assert!(
-        source.notes.iter().any(|n| n.contains("180.0°E)")),
+        source.notes.iter().any(|n| n.contains("180.0E)")),
         "centred on the antimeridian: {:?}",
         source.notes
     );

@@ -812,3 +812,25 @@ fn us_counties_end_to_end() {
     assert_success(&snakegrid(["-q", "-id", "id", p(&dst), p(&src)]));
     assert_eq!(assert_complete("us_counties", &dst).len(), 3107);
 }
+
+#[test]
+fn a_world_layer_in_longitude_and_latitude_is_laid_out_in_equal_earth() {
+    // world_countries taken back to lon/lat (as `ogr2ogr -t_srs EPSG:4326` would): the whole
+    // world, which an azimuthal projection would tear apart and GDAL would refuse to project.
+    let scratch = Scratch::new("world-lonlat");
+    let lonlat = scratch.path("world.gpkg");
+    let mut wgs84 = SpatialRef::from_epsg(4326).unwrap();
+    wgs84.set_axis_mapping_strategy(gdal::spatial_ref::AxisMappingStrategy::TraditionalGisOrder);
+    rewrite("world_countries", &lonlat, false, Some(&wgs84));
+    let dst = scratch.path("grid.gpkg");
+    let output = snakegrid(["-id", "id", p(&dst), p(&lonlat)]);
+    assert_success(&output);
+    let summary = stdout(&output);
+    assert!(summary.contains("projected to Equal Earth"), "{summary}");
+    let (_, rows) = read_rows(&dst);
+    assert_eq!(assert_grid(&rows, "id").len(), 177);
+    let written = Dataset::open(&dst).unwrap();
+    let srs = written.layer(0).unwrap().spatial_ref().unwrap();
+    assert_eq!(srs.name().unwrap(), "WGS 84 / Equal Earth Greenwich");
+    assert!(srs.to_proj4().unwrap().contains("+proj=eqearth"));
+}

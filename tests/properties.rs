@@ -96,7 +96,7 @@ fn points(count: std::ops::RangeInclusive<usize>) -> impl Strategy<Value = Vec<C
 fn cheap(name: &str) -> Option<f64> {
     match name {
         "max_steps" => Some(30.0),
-        "refine_moves" => Some(4000.0),
+        "refine_moves_per_region" => Some(100.0),
         "refine_swap_only_below" => Some(40.0),
         "vertices_per_region" => Some(8.0),
         "threads" => Some(4.0),

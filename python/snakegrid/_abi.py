@@ -67,13 +67,22 @@ class LayoutMetrics(ctypes.Structure):
 
     _fields_ = [
         ("location", ctypes.c_double),
+        ("location_p90", ctypes.c_double),
+        ("location_max", ctypes.c_double),
         ("location_raw", ctypes.c_double),
         ("location_moved", ctypes.c_double),
         ("adjacent", ctypes.c_double),
         ("adjacent_rook", ctypes.c_double),
+        ("false_neighbours", ctypes.c_double),
         ("orientation", ctypes.c_double),
         ("misdirected", ctypes.c_double),
         ("shape", ctypes.c_double),
+        ("source_holes", ctypes.c_double),
+        ("wrong_landmass", ctypes.c_double),
+        ("pieces", ctypes.c_uint32),
+        ("source_pieces", ctypes.c_uint32),
+        ("holes", ctypes.c_uint32),
+        ("notches", ctypes.c_uint32),
     ]
 
 

@@ -5,6 +5,7 @@
 
 use super::frame::Frame;
 use super::grid::{self, Lattice};
+use super::landmass;
 use super::metrics::{self, Scored};
 use super::network::{self, Network};
 use super::outline::{self, Prepared};
@@ -87,7 +88,8 @@ fn generate_here(
     let context = Context {
         prepared: &prepared,
         frame,
-        union_map: frame.polygons_to_map(&prepared.union),
+        reference: metrics::Reference::new(&prepared, frame),
+        home: metrics::Landmasses::new(&prepared.regions_union, prepared.landmass_of.clone()),
         params,
     };
     let jobs: Vec<(usize, [f64; 2])> = (0..runs.len())
@@ -113,8 +115,15 @@ fn generate_here(
         &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
         params.topsis_weights,
     );
+    // The layout's defects first (method.md §8 and the cartographer's priorities: one piece, no
+    // holes), then TOPSIS over location, adjacency, orientation and shape.
+    let defects = |k: usize| layouts[k].metrics.pieces + layouts[k].metrics.holes;
     let mut ranking: Vec<usize> = (0..layouts.len()).collect();
-    ranking.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
+    ranking.sort_by(|&a, &b| {
+        (defects(a).cmp(&defects(b)))
+            .then(scores[b].total_cmp(&scores[a]))
+            .then(a.cmp(&b))
+    });
     let candidates = ranking
         .iter()
         .map(|&k| {
@@ -373,8 +382,10 @@ struct Layout {
 struct Context<'a> {
     prepared: &'a Prepared,
     frame: Frame,
-    /// The regions' union in map units, for the shape metric.
-    union_map: MultiPolygon<f64>,
+    /// What the layouts are scored against.
+    reference: metrics::Reference,
+    /// The regions' landmasses in the unit-cell frame, for the refinement.
+    home: metrics::Landmasses,
     params: &'a Params,
 }
 
@@ -390,24 +401,57 @@ impl Context<'_> {
         let m = network.centroids;
         let moved = &run.positions[..m];
         let moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
-        let lattice = grid::fit(&moved_outline, m, shift);
-        if lattice.cells.len() < m {
+        let mut lattice = grid::frame(&moved_outline, m, shift);
+        // One multipolygon per part of the outline: polygons_of keeps the parts' order.
+        let parts: Vec<MultiPolygon<f64>> = (moved_outline.0.iter())
+            .map(|p| MultiPolygon(vec![p.clone()]))
+            .collect();
+        let part_of = &self.prepared.part_of;
+        let mut demands = vec![0; parts.len()];
+        for &p in part_of {
+            demands[p] += 1;
+        }
+        let selection = landmass::select(&lattice, &parts, &demands, self.params.refine_cell_ratio);
+        lattice.cells = selection.cells;
+        if selection.assigned != m {
             return Err(Error::Internal(format!(
                 "the lattice has {} cells for {m} regions",
-                lattice.cells.len()
+                selection.assigned
             )));
         }
-        let centres: Vec<Coord<f64>> = lattice.cells[..m]
-            .iter()
-            .map(|c| lattice.centre(c.col, c.row))
-            .collect();
-        let mut cells = assign::assign(moved, &centres);
+        // Each landmass's regions are assigned among its own cells.
+        let mut cells = vec![0; m];
+        for part in 0..parts.len() {
+            let regions: Vec<usize> = (0..m).filter(|&i| part_of[i] == part).collect();
+            let own: Vec<usize> = (0..m).filter(|&k| lattice.cells[k].part == part).collect();
+            let points: Vec<Coord<f64>> = regions.iter().map(|&i| moved[i]).collect();
+            let centres: Vec<Coord<f64>> = (own.iter())
+                .map(|&k| lattice.centre(lattice.cells[k].col, lattice.cells[k].row))
+                .collect();
+            for (&region, choice) in regions.iter().zip(assign::assign(&points, &centres)) {
+                cells[region] = own[choice];
+            }
+        }
         if self.params.refine {
+            // Where §8 will measure each region from: its area centroid, taken into the
+            // lattice's frame by the scale-and-shift fit of the assigned layout.
+            let area = &self.prepared.area_centroids;
+            let assigned: Vec<Coord<f64>> = (cells.iter())
+                .map(|&k| lattice.centre(lattice.cells[k].col, lattice.cells[k].row))
+                .collect();
+            let (scale, offset) = metrics::fit(&assigned, area);
+            let targets: Vec<Coord<f64>> = area.iter().map(|&c| (c - offset) / scale).collect();
+            let misplaced = |region: usize, (col, row): (i32, i32)| {
+                self.home
+                    .misplaced(region, lattice.centre(col, row) * scale + offset)
+            };
             let layout = refine::Layout {
                 adjacency: &self.prepared.adjacency,
-                centroids: &self.prepared.centroids,
-                moved,
+                centroids: area,
+                targets: &targets,
                 lattice: &lattice,
+                part_of,
+                misplaced: &misplaced,
             };
             cells = refine::refine(&layout, &cells, self.params, seed);
         }
@@ -429,12 +473,6 @@ impl Context<'_> {
         moved: &[Coord<f64>],
     ) -> (LayoutMetrics, Vec<RegionMetrics>) {
         let f = &self.frame;
-        let centroids: Vec<Coord<f64>> = self
-            .prepared
-            .centroids
-            .iter()
-            .map(|&c| f.to_map(c))
-            .collect();
         let moved: Vec<Coord<f64>> = moved.iter().map(|&c| f.to_map(c)).collect();
         let col_rows: Vec<(i32, i32)> = cells
             .iter()
@@ -445,14 +483,11 @@ impl Context<'_> {
             .map(|&(c, r)| f.to_map(lattice.centre(c, r)))
             .collect();
         metrics::evaluate(&Scored {
-            centroids: &centroids,
+            reference: &self.reference,
             moved: &moved,
             cells: &col_rows,
             centres: &centres,
             cell_size: lattice.cell_size * f.scale,
-            unit: f.scale,
-            adjacency: &self.prepared.adjacency,
-            outline: &self.union_map,
         })
     }
 

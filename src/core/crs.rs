@@ -28,7 +28,8 @@ pub struct WorkingCrs {
     /// Its definition as named WKT2 (ISO 19162:2019), which GDAL, PROJ and QGIS read and show
     /// by name.
     pub wkt: String,
-    /// The name a GIS shows, e.g. "Lambert azimuthal equal-area at 39.5°N 98.6°W (snakegrid)".
+    /// The name a GIS shows, e.g. "Lambert azimuthal equal-area at 39.5N 98.6W (snakegrid)":
+    /// ASCII, because GeoPackage writers and QGIS 3.22 turn a degree sign in a CRS name into "?".
     pub name: String,
     /// What the user should be told: which projection, where, and why.
     pub note: String,
@@ -144,12 +145,12 @@ fn wrap(lon: f64) -> f64 {
 
 fn longitude_text(lon: f64) -> String {
     let hemisphere = if lon < 0.0 { "W" } else { "E" };
-    format!("{:.1}°{hemisphere}", lon.abs())
+    format!("{:.1}{hemisphere}", lon.abs())
 }
 
 fn latitude_text(lat: f64) -> String {
     let hemisphere = if lat < 0.0 { "S" } else { "N" };
-    format!("{:.1}°{hemisphere}", lat.abs())
+    format!("{:.1}{hemisphere}", lat.abs())
 }
 
 /// The stretch of longitudes the regions' spans cover: the circle minus the widest gap between
@@ -220,14 +221,14 @@ mod tests {
         let crs = working_crs(&boxes(&[(-125.0, 24.0, -66.0, 50.0)])).unwrap();
         assert_eq!(
             crs.name,
-            "Lambert azimuthal equal-area at 37.0°N 95.5°W (snakegrid)"
+            "Lambert azimuthal equal-area at 37.0N 95.5W (snakegrid)"
         );
         assert!(crs
             .wkt
             .contains("METHOD[\"Lambert Azimuthal Equal Area\",ID[\"EPSG\",9820]]"));
         assert!(crs.wkt.contains("\"Latitude of natural origin\",37,"));
         assert!(crs.wkt.contains("\"Longitude of natural origin\",-95.5,"));
-        assert!(crs.note.contains("37.0°N 95.5°W"), "{}", crs.note);
+        assert!(crs.note.contains("37.0N 95.5W"), "{}", crs.note);
     }
 
     #[test]
@@ -237,7 +238,7 @@ mod tests {
             (-180.0, -19.0, -178.0, -16.0),
         ]))
         .unwrap();
-        assert!(crs.name.contains("179.5°E"), "{}", crs.name);
+        assert!(crs.name.contains("179.5E"), "{}", crs.name);
     }
 
     #[test]
@@ -254,7 +255,7 @@ mod tests {
             (-180.0, -50.0, -60.0, 60.0),
         ]))
         .unwrap();
-        assert_eq!(pacific.name, "Equal Earth at 160.0°W (snakegrid)");
+        assert_eq!(pacific.name, "Equal Earth at 160.0W (snakegrid)");
         // Exactly half the globe is still one country's azimuthal projection.
         let half = working_crs(&boxes(&[(-90.0, 0.0, 90.0, 10.0)])).unwrap();
         assert!(half.name.starts_with("Lambert"), "{}", half.name);

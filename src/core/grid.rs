@@ -17,12 +17,13 @@
 use geo::{Area, BoundingRect, Coord, LineString, MultiPolygon, Polygon};
 
 /// One lattice cell and its score (1 if its centre is inside the outline, plus the covered
-/// share of its area).
+/// share of its area), and the part of the outline (landmass) it is for.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LatticeCell {
     pub col: i32,
     pub row: i32,
     pub score: f64,
+    pub part: usize,
 }
 
 /// A square lattice: column `col` spans x from `origin.x + col·cell_size`, row `row` spans y
@@ -68,22 +69,18 @@ impl Lattice {
     }
 }
 
-/// Fits the lattice to `outline` for `regions` cells: S' = sqrt(area / regions), origin at the
-/// outline's (x_min, y_max) moved right by `shift[0]·S'` and down by `shift[1]·S'`, extended by
-/// a cell on every side so the outline is covered.
+/// The lattice fitted to `outline` for `regions` cells, without its cells (they come from
+/// [`Lattice::scores`]): S' = sqrt(area / regions), origin at the outline's (x_min, y_max) moved
+/// right by `shift[0]·S'` and down by `shift[1]·S'`, extended by a cell on every side so the
+/// outline is covered.
 ///
 /// The extension puts the top-left corner of cell (0, 0) one cell left of and one cell above the
 /// shifted origin, so with shifts in [0, 1) every point of the outline has u, v > 0 and no cell
-/// that the outline reaches has a negative column or row. Only cells with a positive score are
-/// listed, so the lattice has no fixed width: it reaches as far right and down as the outline.
+/// that the outline reaches has a negative column or row.
 ///
-/// Holes count as outside. A cell whose covered share is within 1e-9 of a whole number gets
-/// exactly that number, so that cells wholly inside tie at a score of exactly 2 and are ordered
-/// by row and column rather than by rounding noise, and cells the outline only grazes drop out.
-///
-/// With no regions or an outline without area there is nothing to fit: the lattice then has no
-/// cells, a cell size of 0 and its origin at (0, 0).
-pub fn fit(outline: &MultiPolygon<f64>, regions: usize, shift: [f64; 2]) -> Lattice {
+/// With no regions or an outline without area there is nothing to fit: the lattice then has a
+/// cell size of 0 and its origin at (0, 0).
+pub fn frame(outline: &MultiPolygon<f64>, regions: usize, shift: [f64; 2]) -> Lattice {
     let size = (outline.unsigned_area() / regions as f64).sqrt();
     let corner = outline.bounding_rect();
     let (Some(corner), true) = (corner, size.is_finite() && size > 0.0) else {
@@ -93,31 +90,48 @@ pub fn fit(outline: &MultiPolygon<f64>, regions: usize, shift: [f64; 2]) -> Latt
             cells: Vec::new(),
         };
     };
-    let origin = Coord {
-        x: corner.min().x + (shift[0] - 1.0) * size,
-        y: corner.max().y - (shift[1] - 1.0) * size,
-    };
-    let mut lattice = Lattice {
+    Lattice {
         cell_size: size,
-        origin,
+        origin: Coord {
+            x: corner.min().x + (shift[0] - 1.0) * size,
+            y: corner.max().y - (shift[1] - 1.0) * size,
+        },
         cells: Vec::new(),
-    };
-    let mut events = Vec::new();
-    for polygon in outline {
-        // Exteriors add area, holes remove it, whatever the orientation of their rings.
-        ring_events(&lattice, polygon.exterior(), 1.0, &mut events);
-        for hole in polygon.interiors() {
-            ring_events(&lattice, hole, -1.0, &mut events);
-        }
     }
-    lattice.cells = sweep(events);
-    lattice.cells.sort_by(|a, b| {
-        b.score
-            .total_cmp(&a.score)
-            .then(a.row.cmp(&b.row))
-            .then(a.col.cmp(&b.col))
-    });
-    lattice
+}
+
+/// Orders cells best first: score descending, then row, then column (method.md §6).
+pub fn best_first(a: &LatticeCell, b: &LatticeCell) -> std::cmp::Ordering {
+    b.score
+        .total_cmp(&a.score)
+        .then(a.row.cmp(&b.row))
+        .then(a.col.cmp(&b.col))
+}
+
+impl Lattice {
+    /// Every cell that `polygons` cover at all, with its score, tagged as belonging to `part`
+    /// (unsorted). Only cells with a positive score are listed, so the lattice has no fixed
+    /// width: it reaches as far right and down as the outline.
+    ///
+    /// Holes count as outside. A cell whose covered share is within 1e-9 of a whole number gets
+    /// exactly that number, so that cells wholly inside tie at a score of exactly 2 and are
+    /// ordered by row and column rather than by rounding noise, and cells the outline only
+    /// grazes drop out.
+    pub fn scores(&self, polygons: &MultiPolygon<f64>, part: usize) -> Vec<LatticeCell> {
+        let mut events = Vec::new();
+        for polygon in polygons {
+            // Exteriors add area, holes remove it, whatever the orientation of their rings.
+            ring_events(self, polygon.exterior(), 1.0, &mut events);
+            for hole in polygon.interiors() {
+                ring_events(self, hole, -1.0, &mut events);
+            }
+        }
+        let mut cells = sweep(events);
+        for cell in &mut cells {
+            cell.part = part;
+        }
+        cells
+    }
 }
 
 /// What one segment piece (or one crossing of a row's centre line) does to one row of cells.
@@ -259,7 +273,12 @@ fn sweep(mut events: Vec<Event>) -> Vec<LatticeCell> {
 fn push_cell(cells: &mut Vec<LatticeCell>, col: i32, row: i32, area: f64, wind: i32) {
     let score = if wind != 0 { 1.0 } else { 0.0 } + snap(area);
     if score > 0.0 {
-        cells.push(LatticeCell { col, row, score });
+        cells.push(LatticeCell {
+            col,
+            row,
+            score,
+            part: 0,
+        });
     }
 }
 
@@ -279,6 +298,16 @@ fn snap(area: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The lattice with every cell `outline` covers, best first: the one-part case.
+    fn fit(outline: &MultiPolygon<f64>, regions: usize, shift: [f64; 2]) -> Lattice {
+        let mut lattice = frame(outline, regions, shift);
+        if lattice.cell_size > 0.0 {
+            lattice.cells = lattice.scores(outline, 0);
+            lattice.cells.sort_by(best_first);
+        }
+        lattice
+    }
     use geo::{BooleanOps, Contains, Point};
     use std::f64::consts::TAU;
 
@@ -334,6 +363,7 @@ mod tests {
                     col,
                     row,
                     score: 2.0,
+                    part: 0,
                 })
             })
             .collect();

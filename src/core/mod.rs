@@ -20,6 +20,7 @@ mod frame;
 pub(crate) mod geometry;
 mod grid;
 pub mod input;
+mod landmass;
 mod metrics;
 mod network;
 mod outline;
@@ -28,6 +29,7 @@ mod rank;
 mod refine;
 mod score;
 mod snake;
+mod tiling;
 
 use geo::{Coord, MultiPolygon, Polygon};
 use serde::Serialize;
@@ -134,29 +136,52 @@ pub struct SnakeReport {
     pub edges: usize,
 }
 
-/// The four layout metrics of method.md §8 and their named variants.
+/// The layout metrics of method.md §8, as the shared judge computes them. `repr(C)`: the C API
+/// hands it out as it is (snakegrid_layout_metrics).
+#[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct LayoutMetrics {
-    /// C_location: mean distance, in cells, from each original centroid to its cell centre after
-    /// the least-squares scale-and-translation fit. Lower is better.
+    /// C_location: mean distance from each region's area centroid to its cell's centre after
+    /// the least-squares scale-and-translation fit, in fitted cells. Lower is better.
     pub location: f64,
-    /// The same without the fit, in map units.
+    /// The 90th percentile of those distances, and the largest: the regions far from home.
+    pub location_p90: f64,
+    pub location_max: f64,
+    /// The mean distance without the fit, in map units.
     pub location_raw: f64,
-    /// The paper's variant: from the moved centroids, in cells, without fit.
+    /// The paper's variant: from the moved centroids, in cells of the map, without fit.
     pub location_moved: f64,
     /// C_adjacent: share of adjacent pairs whose cells are 8-neighbours. Higher is better.
     pub adjacent: f64,
     /// Share of adjacent pairs whose cells share an edge (4-neighbours).
     pub adjacent_rook: f64,
+    /// Of the pairs of 8-neighbour cells, the share whose regions are not adjacent. Lower is
+    /// better.
+    pub false_neighbours: f64,
     /// C_orientation: mean directed angle error over adjacent pairs, degrees. Lower is better.
     pub orientation: f64,
     /// Share of adjacent pairs whose direction is off by more than 45°.
     pub misdirected: f64,
     /// C_shape: Fourier-descriptor similarity of the outlines. Higher is better.
     pub shape: f64,
+    /// The area of the regions' own holes (lakes, missing regions), in fitted cells: holes of
+    /// the layout up to this many are the source's.
+    pub source_holes: f64,
+    /// Among the regions of landmasses of 3+ regions, the share whose cell lies nearer another
+    /// such landmass than its own.
+    pub wrong_landmass: f64,
+    /// Edge-connected pieces of the layout, and connected parts of the regions' union. (The
+    /// counts come last, four 32-bit numbers, so that the C struct has no padding.)
+    pub pieces: u32,
+    pub source_pieces: u32,
+    /// Empty cells enclosed by the layout (the area of its inner rings, in cells).
+    pub holes: u32,
+    /// Empty positions next to the layout with at most one free side (holes included).
+    pub notches: u32,
 }
 
-/// Per-region quality.
+/// Per-region quality. `repr(C)`: the C API hands it out as it is (snakegrid_region_metrics).
+#[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct RegionMetrics {
     /// Distance from the region's centroid to its cell centre, in cells, after the fit.

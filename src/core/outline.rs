@@ -6,9 +6,10 @@ use super::geometry::{nearest_on_segment, point_segment_distance2, segments_inte
 use super::Params;
 use geo::orient::{Direction, Orient};
 use geo::{
-    Area, Centroid, Contains, Coord, InteriorPoint, LineString, MultiPolygon, Point, Polygon,
-    SimplifyVw, SimplifyVwPreserve,
+    Area, BoundingRect, Centroid, Contains, Coord, InteriorPoint, LineString, MultiPolygon, Point,
+    Polygon, SimplifyVw, SimplifyVwPreserve,
 };
+use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, RTreeObject, AABB};
 
 /// Distance, in cells, under which two boundaries count as touching: shared borders that were
@@ -34,36 +35,140 @@ pub struct Ring {
 /// What the later steps need to know of the regions, in the unit-cell frame.
 #[derive(Clone, Debug)]
 pub struct Prepared {
-    /// One centroid per region (§1), inside the simplified outline.
+    /// One centroid per region (§1), inside the simplified outline: the Snake's node.
     pub centroids: Vec<Coord<f64>>,
+    /// The area centroid of each region's whole (multi)polygon: what the metrics measure from
+    /// (§8).
+    pub area_centroids: Vec<Coord<f64>>,
+    /// The union of the regions as it is, every part and hole kept: what the metrics compare
+    /// the layout with.
+    pub regions_union: MultiPolygon<f64>,
+    /// Per region, the part of `regions_union` (its landmass) holding most of its area.
+    pub landmass_of: Vec<usize>,
     /// Adjacent pairs (i < j), sorted.
     pub adjacency: Vec<(usize, usize)>,
     /// The simplified outline.
     pub rings: Vec<Ring>,
-    /// The union of the regions, cleaned but not simplified: the shape the grid map should keep.
-    pub union: MultiPolygon<f64>,
+    /// Per region, the part of the simplified outline (its landmass in the layout) that holds
+    /// its centroid.
+    pub part_of: Vec<usize>,
 }
 
 /// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area).
 pub fn prepare(regions: &[&MultiPolygon<f64>], params: &Params) -> Prepared {
     let centroids: Vec<Coord<f64>> = regions.iter().map(|r| centroid(r)).collect();
+    let area_centroids = regions
+        .iter()
+        .zip(&centroids)
+        .map(|(r, &fallback)| r.centroid().map_or(fallback, |p| p.0))
+        .collect();
     let adjacency = adjacency(regions, params.point_adjacency);
-    let union = clean(merge(regions), &centroids);
+    let regions_union = merge(regions);
+    let landmass_of = landmasses(regions, &regions_union, &centroids);
+    let union = clean(regions_union.clone(), &centroids);
     // Small layers still keep a quadrilateral per ring on average.
     let target = ((params.vertices_per_region * regions.len() as f64).ceil() as usize)
         .max(4 * rings_of(&union).len());
     let rings = rings_of(&simplify(&union, target, params.simplify_tolerance));
     let index = RingIndex::new(&coords_of(&rings));
-    let centroids = centroids
+    let centroids: Vec<Coord<f64>> = centroids
         .into_iter()
         .map(|c| move_inside(c, &index))
         .collect();
+    let part_of = parts_holding(&rings, &centroids);
     Prepared {
         centroids,
+        area_centroids,
+        regions_union,
+        landmass_of,
         adjacency,
         rings,
-        union,
+        part_of,
     }
+}
+
+/// For each point, the part of the outline `rings` whose inside holds it (the nearest part for
+/// a point in none, which only rounding can make).
+fn parts_holding(rings: &[Ring], points: &[Coord<f64>]) -> Vec<usize> {
+    let parts = rings.iter().map(|r| r.part + 1).max().unwrap_or(0);
+    let indexes: Vec<RingIndex> = (0..parts)
+        .map(|part| {
+            let own: Vec<Ring> = rings.iter().filter(|r| r.part == part).cloned().collect();
+            RingIndex::new(&coords_of(&own))
+        })
+        .collect();
+    points
+        .iter()
+        .map(|&p| {
+            (0..parts)
+                .find(|&k| indexes[k].contains(p))
+                .unwrap_or_else(|| {
+                    (0..parts)
+                        .min_by(|&a, &b| {
+                            let d = |k: usize| indexes[k].distance(p, |_| false);
+                            d(a).total_cmp(&d(b)).then(a.cmp(&b))
+                        })
+                        .unwrap_or(0)
+                })
+        })
+        .collect()
+}
+
+/// For each region, the part of `union` that holds most of its area: each of a region's polygons
+/// lies in one part (a connected polygon lies in one connected part of the union), found from a
+/// point inside it (a region whose polygons all fail that test, by rounding, belongs to the part
+/// nearest its centroid).
+fn landmasses(
+    regions: &[&MultiPolygon<f64>],
+    union: &MultiPolygon<f64>,
+    centroids: &[Coord<f64>],
+) -> Vec<usize> {
+    let parts: Vec<RingIndex> = union
+        .0
+        .iter()
+        .map(|p| RingIndex::new(&coords_of(&rings_of(&MultiPolygon(vec![p.clone()])))))
+        .collect();
+    let boxes: RTree<GeomWithData<Rectangle<[f64; 2]>, usize>> = RTree::bulk_load(
+        (union.0.iter().enumerate())
+            .filter_map(|(k, p)| {
+                let b = p.bounding_rect()?;
+                let corners = ([b.min().x, b.min().y], [b.max().x, b.max().y]);
+                Some(GeomWithData::new(
+                    Rectangle::from_corners(corners.0, corners.1),
+                    k,
+                ))
+            })
+            .collect(),
+    );
+    let part_of = |p: Coord<f64>| {
+        (boxes.locate_all_at_point(&[p.x, p.y]))
+            .map(|b| b.data)
+            .filter(|&k| parts[k].contains(p))
+            .min()
+    };
+    regions
+        .iter()
+        .zip(centroids)
+        .map(|(region, &centroid)| {
+            let mut area = vec![0.0; parts.len()];
+            for polygon in &region.0 {
+                if let Some(k) = polygon.interior_point().and_then(|p| part_of(p.0)) {
+                    area[k] += polygon.unsigned_area();
+                }
+            }
+            let held = (0..parts.len())
+                .filter(|&k| area[k] > 0.0)
+                .max_by(|&a, &b| area[a].total_cmp(&area[b]).then(b.cmp(&a)));
+            held.unwrap_or_else(|| {
+                (0..parts.len())
+                    .min_by(|&a, &b| {
+                        let d = |k: usize| parts[k].distance(centroid, |_| false);
+                        d(a).total_cmp(&d(b)).then(a.cmp(&b))
+                    })
+                    .unwrap_or(0)
+            })
+        })
+        .collect()
 }
 
 /// The area centroid, or a point on the surface of the largest part when the centroid falls
@@ -370,7 +475,7 @@ mod tests {
         assert!(prepared.adjacency.contains(&(0, 1)));
         assert!(!prepared.adjacency.contains(&(0, 4)));
         assert_eq!(prepared.rings.len(), 1);
-        assert!((prepared.union.unsigned_area() - 9.0).abs() < 1e-9);
+        assert!((prepared.regions_union.unsigned_area() - 9.0).abs() < 1e-9);
         assert!((prepared.centroids[4].x - 1.5).abs() < 1e-12);
         let with_points = Params {
             point_adjacency: true,

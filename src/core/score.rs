@@ -4,7 +4,7 @@
 use super::candidates::Input;
 use super::metrics::{self, Scored};
 use super::{Error, LayoutMetrics, Params, Region, RegionMetrics};
-use geo::{Area, Centroid, Coord, Polygon};
+use geo::{Area, Centroid, Polygon};
 
 /// Scores `cells` (one square per region, `cells[i]` belonging to `regions[i]`, same planar CRS)
 /// against the regions. Columns and rows are recovered from the cell centres and the mean cell
@@ -28,7 +28,16 @@ pub fn score(
             .ok_or_else(|| Error::input(Some(&regions[i].id), "the cell has no area"))?;
         centres.push(centre.0);
     }
-    let side = (cells.iter().map(|c| c.unsigned_area()).sum::<f64>() / cells.len() as f64).sqrt();
+    // The cell side as the judge takes it: the square root of the median cell area.
+    let mut areas: Vec<f64> = cells.iter().map(|c| c.unsigned_area()).collect();
+    areas.sort_by(f64::total_cmp);
+    let middle = areas.len() / 2;
+    let median = if areas.len().is_multiple_of(2) {
+        (areas[middle - 1] + areas[middle]) / 2.0
+    } else {
+        areas[middle]
+    };
+    let side = median.sqrt();
     let left = centres.iter().map(|c| c.x).fold(f64::INFINITY, f64::min);
     let top = centres
         .iter()
@@ -43,23 +52,14 @@ pub fn score(
             )
         })
         .collect();
-    let f = &input.frame;
-    let centroids: Vec<Coord<f64>> = input
-        .prepared
-        .centroids
-        .iter()
-        .map(|&c| f.to_map(c))
-        .collect();
+    let reference = metrics::Reference::new(&input.prepared, input.frame);
     let (layout, sorted_metrics) = metrics::evaluate(&Scored {
-        centroids: &centroids,
+        reference: &reference,
         // No Snake ran: the paper's variant measures from the centroids themselves.
-        moved: &centroids,
+        moved: &reference.centroids,
         cells: &col_rows,
         centres: &centres,
         cell_size: side,
-        unit: f.scale,
-        adjacency: &input.prepared.adjacency,
-        outline: &f.polygons_to_map(&input.prepared.union),
     });
     let mut per_region = vec![RegionMetrics::default(); regions.len()];
     for (k, &i) in input.order.iter().enumerate() {

@@ -93,7 +93,7 @@ pub unsafe extern "C" fn snakegrid_crs_wkt(crs: *const Crs, out: *mut *const c_c
     unsafe { read("snakegrid_crs_wkt", crs, out, |c| &c.wkt) }
 }
 
-/// The CRS's name, e.g. "Lambert azimuthal equal-area at 37.0°N 95.5°W (snakegrid)". As
+/// The CRS's name (ASCII), e.g. "Lambert azimuthal equal-area at 37.0N 95.5W (snakegrid)". As
 /// snakegrid_crs_wkt().
 ///
 /// Thread safety: any number of threads may read one handle at once.

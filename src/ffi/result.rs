@@ -82,68 +82,6 @@ impl From<StopReason> for SnakeStop {
     }
 }
 
-/// The four layout metrics of method.md section 8 and their named variants.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CLayoutMetrics {
-    /// C_location: mean distance, in cells, from each region's centroid to its cell centre
-    /// after a least-squares scale-and-translation fit. Lower is better.
-    pub location: f64,
-    /// The same without the fit, in map units.
-    pub location_raw: f64,
-    /// The paper's variant: from the moved centroids, in cells, without the fit.
-    pub location_moved: f64,
-    /// C_adjacent: share of adjacent region pairs whose cells touch (8-neighbourhood). Higher
-    /// is better.
-    pub adjacent: f64,
-    /// Share of adjacent pairs whose cells share an edge (4-neighbourhood).
-    pub adjacent_rook: f64,
-    /// C_orientation: mean angle error over adjacent pairs, degrees (0-180). Lower is better.
-    pub orientation: f64,
-    /// Share of adjacent pairs whose direction is off by more than 45 degrees.
-    pub misdirected: f64,
-    /// C_shape: similarity of the outlines of the cells and of the regions (0-1). Higher is
-    /// better.
-    pub shape: f64,
-}
-
-impl From<&LayoutMetrics> for CLayoutMetrics {
-    fn from(m: &LayoutMetrics) -> Self {
-        CLayoutMetrics {
-            location: m.location,
-            location_raw: m.location_raw,
-            location_moved: m.location_moved,
-            adjacent: m.adjacent,
-            adjacent_rook: m.adjacent_rook,
-            orientation: m.orientation,
-            misdirected: m.misdirected,
-            shape: m.shape,
-        }
-    }
-}
-
-/// How well one region is placed.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CRegionMetrics {
-    /// Distance from the region's centroid to its cell centre, in cells, after the fit.
-    pub displacement: f64,
-    /// Share of the region's adjacent regions whose cells touch its cell (1 when it has none).
-    pub neighbours_kept: f64,
-    /// Mean angle error to its adjacent regions, degrees (0 when it has none).
-    pub orientation_error: f64,
-}
-
-impl From<&RegionMetrics> for CRegionMetrics {
-    fn from(m: &RegionMetrics) -> Self {
-        CRegionMetrics {
-            displacement: m.displacement,
-            neighbours_kept: m.neighbours_kept,
-            orientation_error: m.orientation_error,
-        }
-    }
-}
-
 /// What the Snake did in one run.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -188,7 +126,7 @@ pub struct CCandidate {
     /// TOPSIS closeness to the ideal (higher is better).
     pub score: f64,
     /// Its layout metrics.
-    pub metrics: CLayoutMetrics,
+    pub metrics: LayoutMetrics,
     /// Its Snake run.
     pub snake: CSnakeReport,
 }
@@ -200,7 +138,7 @@ impl From<&CandidateReport> for CCandidate {
             shift_x: c.shift[0],
             shift_y: c.shift[1],
             score: c.score,
-            metrics: (&c.metrics).into(),
+            metrics: c.metrics,
             snake: (&c.snake).into(),
         }
     }
@@ -383,12 +321,12 @@ pub unsafe extern "C" fn snakegrid_result_moved_outline_wkb(
 pub unsafe extern "C" fn snakegrid_result_region_metrics(
     result: *const RunResult,
     index: usize,
-    out: *mut CRegionMetrics,
+    out: *mut RegionMetrics,
 ) -> Status {
     // SAFETY: passed on (header contract).
     unsafe {
         read("snakegrid_result_region_metrics", result, out, |o| {
-            Ok((&at(&o.map.cells, index, "regions")?.metrics).into())
+            Ok(at(&o.map.cells, index, "regions")?.metrics)
         })
     }
 }
@@ -400,12 +338,12 @@ pub unsafe extern "C" fn snakegrid_result_region_metrics(
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_result_layout_metrics(
     result: *const RunResult,
-    out: *mut CLayoutMetrics,
+    out: *mut LayoutMetrics,
 ) -> Status {
     // SAFETY: passed on (header contract).
     unsafe {
         read("snakegrid_result_layout_metrics", result, out, |o| {
-            Ok((&o.map.metrics).into())
+            Ok(o.map.metrics)
         })
     }
 }

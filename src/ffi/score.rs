@@ -3,9 +3,8 @@
 
 use super::handle::{self, Out, OutArray};
 use super::regions::Regions;
-use super::result::{CLayoutMetrics, CRegionMetrics};
 use super::status::{guard, Failure, Status};
-use crate::core::{Error, Region};
+use crate::core::{Error, LayoutMetrics, Region, RegionMetrics};
 use geo::Polygon;
 use std::collections::HashMap;
 
@@ -61,8 +60,8 @@ fn cells_by_id(regions: &[Region], cells: &[Region]) -> Result<Vec<Polygon<f64>>
 pub unsafe extern "C" fn snakegrid_score(
     regions: *const Regions,
     cells: *const Regions,
-    layout: *mut CLayoutMetrics,
-    region_metrics: *mut CRegionMetrics,
+    layout: *mut LayoutMetrics,
+    region_metrics: *mut RegionMetrics,
     region_metrics_len: usize,
 ) -> Status {
     guard("snakegrid_score", || {
@@ -98,9 +97,9 @@ pub unsafe extern "C" fn snakegrid_score(
         }
         let squares = cells_by_id(list, cell_list)?;
         let (metrics, per) = crate::score(list, &squares)?;
-        layout.write((&metrics).into());
+        layout.write(metrics);
         if let Some(array) = per_region {
-            array.write(per.iter().map(CRegionMetrics::from));
+            array.write(per.iter().copied());
         }
         Ok(())
     })

@@ -219,16 +219,24 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
         round_to(map.cell_size, 1),
     );
     text += &format!(
-        "metrics: C_adjacent {:.3} (rook {:.3}), C_orientation {:.1}° (misdirected {:.3}), \
-         C_location {:.3} cells (unfitted {}, from moved centroids {:.3}), C_shape {:.3}\n",
+        "metrics: C_adjacent {:.3} (rook {:.3}, false neighbours {:.3}), C_orientation {:.1}° \
+         (misdirected {:.3}), C_location {:.3} cells (p90 {:.2}, max {:.2}; unfitted {}, from \
+         moved centroids {:.3}), C_shape {:.3}\n",
         m.adjacent,
         m.adjacent_rook,
+        m.false_neighbours,
         m.orientation,
         m.misdirected,
         m.location,
+        m.location_p90,
+        m.location_max,
         round_to(m.location_raw, 1),
         m.location_moved,
         m.shape
+    );
+    text += &format!(
+        "layout: {} piece(s) (the regions: {}), {} hole(s), {} notch(es), wrong landmass {:.3}\n",
+        m.pieces, m.source_pieces, m.holes, m.notches, m.wrong_landmass
     );
     text += &format!(
         "snake: {} steps, stopped by {}, spread of neighbour distances {:.3} → {:.3} \

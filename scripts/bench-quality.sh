@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# Quality of the layouts, measured by the shared judge (../shared/eval/gridmap_eval.py, the
+# reference implementation of method.md §8), on every shared layer and on generated ones (random
+# Voronoi layers, islands, a river-like gap; scripts/make-test-layers.py), through the command
+# line with the defaults and with -refine false; writes QUALITY.md with every metric in one
+# table and the reference figures of other tools beside them. Re-run it before any stop that
+# touches the core.
+#
+# Usage: scripts/bench-quality.sh [EXTRA SNAKEGRID OPTIONS...]    (from anywhere; needs a release
+#        build, Python 3 with shapely, numpy, pyogrio and pyproj; about 5 minutes)
+# Environment: SNAKEGRID_DATA (default ../shared/data), QUALITY_OUT (default QUALITY.md).
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+data="${SNAKEGRID_DATA:-$root/../shared/data}"
+judge="$root/../shared/eval/gridmap_eval.py"
+out="${QUALITY_OUT:-$root/QUALITY.md}"
+cli="$root/target/release/snakegrid"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+[ -x "$cli" ] || cargo build --manifest-path "$root/Cargo.toml" --release --bin snakegrid
+
+make() { python3 "$root/scripts/make-test-layers.py" "$@"; }
+make voronoi 300 1 "$work/voronoi_300.gpkg"
+make voronoi 3000 2 "$work/voronoi_3000.gpkg"
+make islands 3 "$work/islands.gpkg"
+make river 300 4 "$work/river.gpkg"
+layers=(
+    "$data/us_states.gpkg" "$data/nc_counties.gpkg" "$data/virginia_counties.gpkg"
+    "$data/world_countries.gpkg" "$data/us_counties.gpkg"
+    "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
+)
+
+rows="$work/rows.tsv"
+: > "$rows"
+for source in "${layers[@]}"; do
+    name="$(basename "$source" .gpkg)"
+    for variant in default plain; do
+        options=("$@")
+        [ "$variant" = plain ] && options+=(-refine false)
+        grid="$work/$name-$variant.gpkg"
+        started=$(date +%s.%N)
+        "$cli" -q -id id "${options[@]}" "$grid" "$source"
+        seconds=$(echo "$(date +%s.%N) - $started" | bc)
+        python3 "$judge" --regions "$source" --grid "$grid" --id id |
+            python3 -c '
+import json, sys
+j = json.load(sys.stdin)
+name, variant, seconds = sys.argv[1:4]
+print("\t".join([name, variant, "%.1f" % float(seconds)] + [
+    "%.3f" % j["adjacency_kept_queen"], "%.3f" % j["adjacency_kept"],
+    "%.3f" % j["false_neighbours_queen"], "%.1f" % j["orientation_deg"],
+    "%.3f" % j["misdirected_share"], "%.3f" % j["location_cells"],
+    "%.2f" % j["location_p90_cells"], "%.2f" % j["location_max_cells"], "%.3f" % j["shape_fd"],
+    "%d" % j["components_cells"], "%d" % j["holes_cells"], "%d" % j["gap_cells"],
+    "%.3f" % j["wrong_landmass_share"]]))' "$name" "$variant" "$seconds" >> "$rows"
+        echo "quality: $name $variant done" >&2
+    done
+done
+
+{
+    echo "# Quality"
+    echo
+    echo "Every layout below is judged by the shared judge (\`../shared/eval/gridmap_eval.py\`, the"
+    echo "reference implementation of method.md §8), which also scores the other tools. Made by"
+    echo "\`scripts/bench-quality.sh $*\` on $(date -u +%Y-%m-%d), snakegrid $(git -C "$root" describe --always --dirty),"
+    echo "load $(cut -d' ' -f1-3 /proc/loadavg). *default* is the command line's defaults; *plain* is"
+    echo "\`-refine false\` (the paper's method with our landmass budgets). The generated layers come"
+    echo "from \`scripts/make-test-layers.py\`: random Voronoi cells of 300 and 3,000 regions, three"
+    echo "far-apart landmasses with islands (\`islands\`), and Voronoi cells cut by a winding river"
+    echo "gap (\`river\`)."
+    echo
+    echo "Columns: C_adjacent in the 8-neighbourhood and the 4-neighbourhood (shared edge), the"
+    echo "false-neighbour share, C_orientation (degrees) and the misdirected share (> 45°),"
+    echo "C_location in fitted cells with its 90th percentile and maximum, C_shape, then the shape"
+    echo "of the layout: pieces, holes (cells), notches, and the wrong-landmass share; time is the"
+    echo "wall time of the whole command line run."
+    echo
+    echo "| layer | run | time s | adj 8 | adj 4 | false | orient ° | > 45° | location | p90 | max | shape | pieces | holes | notches | wrong land |"
+    echo "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    while IFS=$'\t' read -r -a cells; do
+        printf '| %s |\n' "$(IFS='|'; echo "${cells[*]}" | sed 's/|/ | /g')"
+    done < "$rows"
+    echo
+    echo "## Other tools, by the same judge (issue 13; adjacency 8-nbr / orientation / location / shape)"
+    echo
+    echo "| layout | us_states | nc_counties | virginia_counties | world_countries |"
+    echo "|---|---|---|---|---|"
+    echo "| R tilemaps 0.2.2 | .879 / 26.7 / .809 / .913 | .892 / 24.5 / .563 / .909 | .787 / 27.4 / .939 / .927 | fails |"
+    echo "| carto-flow | .888 / 24.3 / .782 / .886 | .870 / 27.0 / .728 / .877 | .847 / 29.4 / .986 / .887 | .735 / 43.7 / 1.79 / .810 |"
+    echo "| New York Times, hand-made | .897 / 22.1 / .864 / .899; 1 piece, 0 holes, 1 notch, false neighbours .338 | | | |"
+} > "$out"
+echo "$out"

@@ -1,0 +1,217 @@
+#!/usr/bin/env python3
+"""Generated layers for benchmarks and quality runs: what the shared layers do not show.
+
+    make-test-layers.py voronoi N SEED OUT.gpkg     random Voronoi cells (a tessellation like
+                                                    administrative regions), N regions
+    make-test-layers.py islands SEED OUT.gpkg       three far-apart landmasses of Voronoi cells,
+                                                    each with a few islands off its coast
+    make-test-layers.py river N SEED OUT.gpkg       Voronoi cells cut by a river-like gap, the
+                                                    outline's two banks close together
+    make-test-layers.py densify SRC VERTICES OUT.gpkg
+                                                    SRC with every edge subdivided, to about
+                                                    VERTICES vertices in all, with a small wiggle
+                                                    that both neighbours of a shared edge share
+                                                    (so adjacency is kept exactly)
+    make-test-layers.py star VERTICES OUT.gpkg      one region: a star with VERTICES vertices
+    make-test-layers.py square VERTICES OUT.gpkg    one region: a square densified to VERTICES
+
+Every layer is a GeoPackage with one layer named like the file, a text field `id`, projected
+coordinates in metres (EPSG:3857 for the generated ones, the source's for densify). The same
+arguments give the same file. Needs shapely, numpy and pyogrio.
+"""
+
+import math
+import os
+import sys
+
+import numpy as np
+import pyogrio.raw
+import shapely
+
+SIDE = 1_000_000.0  # metres: the square the generated layers fill
+
+
+def write(path, ids, geometries, crs="EPSG:3857"):
+    """A GeoPackage of `geometries` (shapely) with ids, one layer named like the file."""
+    if os.path.exists(path):
+        os.remove(path)
+    layer = os.path.splitext(os.path.basename(path))[0]
+    multi = [g if g.geom_type == "MultiPolygon" else shapely.MultiPolygon([g]) for g in geometries]
+    pyogrio.raw.write(
+        path,
+        geometry=shapely.to_wkb(np.array(multi, dtype=object)),
+        field_data=[np.array(ids, dtype=object)],
+        fields=["id"],
+        crs=crs,
+        layer=layer,
+        driver="GPKG",
+        geometry_type="MultiPolygon",
+        # GeoPackage 1.3, which every GDAL since 3.0 reads without a warning.
+        dataset_options={"VERSION": "1.3"},
+    )
+
+
+def random_points(rng, n, frame):
+    """`n` points spread over `frame`, at least a hundredth of the mean spacing apart."""
+    minx, miny, maxx, maxy = frame.bounds
+    gap = 0.01 * math.sqrt(frame.area / n)
+    points = []
+    while len(points) < n:
+        x, y = rng.uniform(minx, maxx), rng.uniform(miny, maxy)
+        if frame.contains(shapely.Point(x, y)) and all(
+            abs(x - px) > gap or abs(y - py) > gap for px, py in points[-50:]
+        ):
+            points.append((x, y))
+    return points
+
+
+def voronoi(n, seed):
+    rng = np.random.default_rng(seed)
+    frame = shapely.box(0, 0, SIDE, SIDE)
+    cells = voronoi_tiles(random_points(rng, n, frame), frame)
+    return [f"v{k}" for k in range(n)], cells
+
+
+def voronoi_tiles(points, frame):
+    """Voronoi cells of many points: shapely's diagram at once, matched to points by an index."""
+    diagram = shapely.voronoi_polygons(shapely.MultiPoint(points), extend_to=frame)
+    polygons = list(diagram.geoms)
+    tree = shapely.STRtree(polygons)
+    cells = [None] * len(points)
+    for k, p in enumerate(points):
+        for j in tree.query(shapely.Point(p), predicate="intersects"):
+            cells[k] = polygons[j].intersection(frame)
+            break
+    return cells
+
+
+def islands(seed):
+    """Three landmasses far apart (60, 30 and 12 regions), each with islands off its coast."""
+    rng = np.random.default_rng(seed)
+    ids, geometries = [], []
+    for land, (count, x0, y0, size) in enumerate(
+        [(60, 0, 0, 600_000), (30, 2_000_000, 300_000, 400_000), (12, 900_000, 1_800_000, 250_000)]
+    ):
+        frame = shapely.Point(x0 + size / 2, y0 + size / 2).buffer(size / 2, quad_segs=16)
+        cells = voronoi_tiles(random_points(rng, count, frame), frame)
+        for k, cell in enumerate(cells):
+            ids.append(f"l{land}_{k}")
+            geometries.append(cell)
+        for k in range(3):
+            angle = rng.uniform(0, 2 * math.pi)
+            distance = size * rng.uniform(0.6, 0.8)
+            cx = x0 + size / 2 + distance * math.cos(angle)
+            cy = y0 + size / 2 + distance * math.sin(angle)
+            ids.append(f"l{land}_island{k}")
+            geometries.append(shapely.Point(cx, cy).buffer(size * 0.04, quad_segs=8))
+    return ids, geometries
+
+
+def river(n, seed):
+    """Voronoi cells with a winding gap through the middle (a river of a fiftieth of the side)."""
+    rng = np.random.default_rng(seed)
+    frame = shapely.box(0, 0, SIDE, SIDE)
+    xs = np.linspace(-SIDE * 0.05, SIDE * 1.05, 200)
+    course = shapely.LineString(
+        [(x, SIDE / 2 + SIDE * 0.15 * math.sin(3 * math.pi * x / SIDE)) for x in xs]
+    )
+    land = frame.difference(course.buffer(SIDE / 100))
+    cells = voronoi_tiles(random_points(rng, n, land), frame)
+    pieces = []
+    for cell in cells:
+        piece = cell.intersection(land)
+        # A cell the river cuts keeps its larger side: each region is one piece of land.
+        if piece.geom_type == "MultiPolygon":
+            piece = max(piece.geoms, key=lambda g: g.area)
+        pieces.append(piece)
+    return [f"r{k}" for k in range(n)], pieces
+
+
+def wiggled(a, b, pieces):
+    """The points between `a` and `b` (exclusive) on a wiggle that depends only on the segment,
+    not on its direction: both regions beside a shared edge get the same vertices."""
+    if (a[0], a[1]) > (b[0], b[1]):
+        return wiggled(b, a, pieces)[::-1]
+    (ax, ay), (bx, by) = a, b
+    length = math.hypot(bx - ax, by - ay)
+    if length == 0:
+        return []
+    nx, ny = -(by - ay) / length, (bx - ax) / length
+    amplitude = 0.02 * length
+    out = []
+    for k in range(1, pieces):
+        t = k / pieces
+        w = amplitude * math.sin(math.pi * t) * math.sin(7 * math.pi * t)
+        out.append((ax + t * (bx - ax) + w * nx, ay + t * (by - ay) + w * ny))
+    return out
+
+
+def densify_ring(coords, pieces):
+    coords = list(coords)
+    out = []
+    for a, b in zip(coords[:-1], coords[1:]):
+        out.append(a)
+        out.extend(wiggled(a, b, pieces))
+    out.append(coords[-1])
+    return out
+
+
+def densify_polygon(polygon, pieces):
+    return shapely.Polygon(
+        densify_ring(polygon.exterior.coords, pieces),
+        [densify_ring(r.coords, pieces) for r in polygon.interiors],
+    )
+
+
+def densify(src, vertices):
+    info = pyogrio.read_info(src)
+    _, _, wkb, fields = pyogrio.raw.read(src, columns=["id"])
+    geometries = list(shapely.from_wkb(wkb))
+    have = sum(shapely.get_num_coordinates(g) for g in geometries)
+    pieces = max(1, round(vertices / have))
+    out = []
+    for g in geometries:
+        parts = g.geoms if g.geom_type == "MultiPolygon" else [g]
+        out.append(shapely.MultiPolygon([densify_polygon(p, pieces) for p in parts]))
+    return [str(v) for v in fields[0]], out, info["crs"]
+
+
+def star(vertices):
+    t = np.linspace(0, 2 * math.pi, vertices, endpoint=False)
+    r = SIDE * (0.5 + 0.4 * np.where(np.arange(vertices) % 2 == 0, 1.0, 0.2))
+    return shapely.Polygon(np.column_stack([r * np.cos(t), r * np.sin(t)]))
+
+
+def square(vertices):
+    per_side = max(1, vertices // 4)
+    t = np.linspace(0, SIDE, per_side, endpoint=False)
+    z, one = np.zeros(per_side), np.full(per_side, SIDE)
+    ring = np.concatenate(
+        [np.column_stack(c) for c in [(t, z), (one, t), (SIDE - t, one), (z, SIDE - t)]]
+    )
+    return shapely.Polygon(ring)
+
+
+def main(argv):
+    kind, args = argv[1], argv[2:]
+    if kind == "voronoi":
+        ids, geometries = voronoi(int(args[0]), int(args[1]))
+        write(args[2], ids, geometries)
+    elif kind == "islands":
+        ids, geometries = islands(int(args[0]))
+        write(args[1], ids, geometries)
+    elif kind == "river":
+        ids, geometries = river(int(args[0]), int(args[1]))
+        write(args[2], ids, geometries)
+    elif kind == "densify":
+        ids, geometries, crs = densify(args[0], int(float(args[1])))
+        write(args[2], ids, geometries, crs)
+    elif kind in ("star", "square"):
+        shape = star if kind == "star" else square
+        write(args[1], ["one"], [shape(int(float(args[0])))])
+    else:
+        sys.exit(__doc__)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
