@@ -1,16 +1,19 @@
 #!/usr/bin/env bash
-# Fuzzes the WKB reader (`wkb`) and the option parser (`options`) with cargo-fuzz for a bounded
-# time each, starting from the corpus kept in fuzz/corpus/<target>/ (read only: new inputs go to a
+# Fuzzes the WKB reader (`wkb`) and the option parser (`options`) with cargo-fuzz, starting from
+# the corpus kept in fuzz/corpus/<target>/ (read only: new inputs go to a
 # temporary folder, so a run does not churn the repository; add a useful one by hand). Exits
 # non-zero on the first crash; libFuzzer leaves the crashing input in fuzz/artifacts/<target>/.
 #
-# Usage: scripts/fuzz.sh [SECONDS per target, default 60] [TARGET...]   (default: all targets)
+# Usage: scripts/fuzz.sh [LIMIT, default 60] [TARGET...]   (default: all targets)
+#   LIMIT is seconds per target, or a count of inputs as `20000runs`: CI uses a count with the
+#   fixed seed below, so that what it tries does not depend on the machine's speed or luck; for a
+#   longer search with a fresh seed each time, give seconds and FUZZ_SEED=0.
 # Needs cargo-fuzz (`cargo install cargo-fuzz`, about 2 minutes). cargo-fuzz needs nightly
 # flags; RUSTC_BOOTSTRAP=1 lets the stable toolchain accept them.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-seconds="${1:-60}"
+limit="${1:-60}"
 shift || true
 targets=("$@")
 [ "${#targets[@]}" -gt 0 ] || targets=(wkb options)
@@ -24,10 +27,14 @@ trap 'rm -rf "$work"' EXIT
 # assertions: geo's relate has debug assertions that fire on degenerate but harmless input,
 # e.g. subnormal coordinates) plus AddressSanitizer.
 cargo fuzz build --release
+case "$limit" in
+    *runs) bound=(-runs="${limit%runs}") ;;
+    *) bound=(-max_total_time="$limit") ;;
+esac
 for target in "${targets[@]}"; do
-    echo "== fuzzing $target for ${seconds}s"
+    echo "== fuzzing $target: $limit"
     mkdir -p "$work/$target"
     cargo fuzz run --release "$target" "$work/$target" "fuzz/corpus/$target" -- \
-        -max_total_time="$seconds" -print_final_stats=1
+        "${bound[@]}" -seed="${FUZZ_SEED:-1}" -print_final_stats=1
 done
-echo "fuzz: no crash in ${targets[*]} (${seconds}s each)"
+echo "fuzz: no crash in ${targets[*]} ($limit each)"

@@ -25,6 +25,14 @@ fi
 apt-get update -qq
 apt-get install -y -qq --no-install-recommends \
     libgdal-dev gdal-bin pkg-config cmake g++ valgrind python3-pip >/dev/null
+# More packages for later steps (CI's QGIS), installed while the build runs, which needs only
+# the ones above.
+extra=""
+if [ -n "${SNAKEGRID_EXTRA_PACKAGES:-}" ]; then
+    # shellcheck disable=SC2086 # a list of package names
+    apt-get install -y -qq --no-install-recommends $SNAKEGRID_EXTRA_PACKAGES >/dev/null &
+    extra=$!
+fi
 # The shared judge's (../shared/eval/gridmap_eval.py) packages, for tests/judge.rs and
 # scripts/bench-quality.sh. The python3 first on PATH: on Debian's own, pip needs
 # --break-system-packages (its Python is externally managed).
@@ -32,4 +40,7 @@ python3 -m pip install --quiet --disable-pip-version-check shapely numpy pyogrio
     python3 -m pip install --quiet --disable-pip-version-check --break-system-packages \
         shapely numpy pyogrio pyproj
 cargo build --release
+if [ -n "$extra" ]; then
+    wait "$extra" || { echo "setup: installing $SNAKEGRID_EXTRA_PACKAGES failed" >&2; exit 1; }
+fi
 echo "snakegrid built: target/release/snakegrid, target/release/libsnakegrid.{so,a}"

@@ -275,3 +275,28 @@ fn coordinates_out_of_proportion_are_refused_by_name() {
         "{error}"
     );
 }
+
+#[test]
+fn regions_whose_union_or_outline_is_empty_are_refused_by_name() {
+    // Found by fuzzing (fuzz/corpus/wkb/): regions with area whose subnormal coordinates
+    // (8e-320, 1e-314) leave the union of the regions, or its outline, empty.
+    for case in ["empty_union", "empty_outline"] {
+        let bytes = std::fs::read(
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("fuzz/corpus/wkb")
+                .join(case),
+        )
+        .unwrap();
+        let region = snakegrid::Region {
+            id: "sliver".into(),
+            geometry: snakegrid::wkb::to_multi_polygon(&bytes).unwrap(),
+        };
+        let error = generate(&[region], &Params::default(), &|_, _| true).unwrap_err();
+        assert!(
+            error
+                .to_string()
+                .starts_with("feature sliver: the union of the regions has no area"),
+            "{case}: {error}"
+        );
+    }
+}

@@ -515,31 +515,58 @@ fn the_json_report_has_the_metrics_and_the_snake_run() {
 fn two_runs_give_byte_identical_outputs() {
     let scratch = Scratch::new("identical");
     let src = scratch.input("us_states");
-    let run = |folder: &str| {
-        let dir = scratch.path(folder);
-        std::fs::create_dir(&dir).unwrap();
-        let output = std::process::Command::new(env!("CARGO_BIN_EXE_snakegrid"))
-            .current_dir(&dir)
-            .args([
-                "-q",
-                "-id",
-                "id",
-                "-json",
-                "r.json",
-                "-svg",
-                "p.svg",
-                "grid.gpkg",
-                p(&src),
-            ])
-            .output()
-            .unwrap();
-        assert_success(&output);
-        ["grid.gpkg", "r.json", "p.svg"].map(|f| std::fs::read(dir.join(f)).unwrap())
-    };
-    let (first, second) = (run("a"), run("b"));
+    let (first, second) = (
+        outputs_of(&scratch, "a", &src, &[], None),
+        outputs_of(&scratch, "b", &src, &[], None),
+    );
     for (k, name) in ["grid.gpkg", "r.json", "p.svg"].iter().enumerate() {
         assert!(first[k] == second[k], "{name} differs between two runs");
     }
+}
+
+#[test]
+fn one_worker_or_four_give_byte_identical_outputs() {
+    // Above the sparse assignment's limit and with fewer layouts than workers would take in
+    // parallel; fewer refinement moves keep the test short.
+    let scratch = Scratch::new("workers");
+    let src = scratch.input("us_counties");
+    let options = ["-max_layouts", "3", "-refine_moves_per_region", "100"];
+    let one = outputs_of(&scratch, "one", &src, &options, Some("1"));
+    let four = outputs_of(&scratch, "four", &src, &options, Some("4"));
+    for (k, name) in ["grid.gpkg", "r.json", "p.svg"].iter().enumerate() {
+        assert!(one[k] == four[k], "{name} differs between 1 and 4 workers");
+    }
+}
+
+/// The layer, report and picture of a run on `src` in a new folder `folder`, with `threads`
+/// as RAYON_NUM_THREADS when given.
+fn outputs_of(
+    scratch: &Scratch,
+    folder: &str,
+    src: &Path,
+    options: &[&str],
+    threads: Option<&str>,
+) -> [Vec<u8>; 3] {
+    let dir = scratch.path(folder);
+    std::fs::create_dir(&dir).unwrap();
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_snakegrid"));
+    command.current_dir(&dir).args(options).args([
+        "-q",
+        "-id",
+        "id",
+        "-json",
+        "r.json",
+        "-svg",
+        "p.svg",
+        "grid.gpkg",
+        p(src),
+    ]);
+    if let Some(threads) = threads {
+        command.env("RAYON_NUM_THREADS", threads);
+    }
+    let output = command.output().unwrap();
+    assert_success(&output);
+    ["grid.gpkg", "r.json", "p.svg"].map(|f| std::fs::read(dir.join(f)).unwrap())
 }
 
 /// A copy of layer `layer` with its features in reverse order (and so other FIDs), optionally

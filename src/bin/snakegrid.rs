@@ -7,7 +7,7 @@ use signal_hook::{flag, low_level};
 use snakegrid::io::{self, Job};
 use snakegrid::{Error, Params, PARAMETERS};
 use std::ffi::{c_int, OsString};
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -183,34 +183,73 @@ fn one_line(error: &clap::Error, original: &[OsString]) -> String {
 
 /// GDAL's progress line, "0...10...20...30...40...50...60...70...80...90...100 - done.", on
 /// stderr: 40 ticks, a number every 4. Fractions come from worker threads, possibly out of
-/// order: the line only ever moves forward.
+/// order: the line only ever moves forward. On a terminal the stage at work ("Snake step 4 of
+/// 30", "layout 2 of 9: refining") follows the ticks and is rubbed out before the next ones,
+/// so that a pipe or log still gets GDAL's line exactly.
 struct TermProgress {
+    line: Mutex<Line>,
+    terminal: bool,
+}
+
+struct Line {
     /// Ticks printed so far; -1 before the first.
-    ticks: Mutex<i32>,
+    ticks: i32,
+    /// The stage shown after the ticks, to rub out.
+    stage: String,
 }
 
 impl TermProgress {
-    fn update(&self, fraction: f64) -> bool {
+    fn new() -> Self {
+        TermProgress {
+            line: Mutex::new(Line {
+                ticks: -1,
+                stage: String::new(),
+            }),
+            terminal: std::io::stderr().is_terminal(),
+        }
+    }
+
+    fn update(&self, fraction: f64, stage: &str) -> bool {
+        // The line starts once the source is read: a source refused while it is read (ids the
+        // output cannot store, say) gets the error line alone.
+        if stage == "reading" {
+            return true;
+        }
         // The lock is held while printing, or two threads could print their parts swapped.
-        let mut ticks = self
-            .ticks
+        let mut line = self
+            .line
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
-        let text = advance(&mut ticks, fraction);
-        if !text.is_empty() {
-            let mut err = std::io::stderr().lock();
-            let _ = err.write_all(text.as_bytes());
-            let _ = err.flush();
+        let text = advance(&mut line.ticks, fraction);
+        let restage = self.terminal && line.ticks < 40 && stage != line.stage;
+        if text.is_empty() && !restage {
+            return true;
         }
+        let mut out = String::new();
+        if self.terminal && !line.stage.is_empty() {
+            // Back over " stage", then clear to the end of the line.
+            out += &"\u{8}".repeat(line.stage.chars().count() + 1);
+            out += "\x1b[K";
+            line.stage.clear();
+        }
+        out += &text;
+        if self.terminal && line.ticks < 40 {
+            out += &format!(" {stage}");
+            line.stage = stage.to_owned();
+        }
+        let mut err = std::io::stderr().lock();
+        let _ = err.write_all(out.as_bytes());
+        let _ = err.flush();
         true
     }
 
     /// Ends an unfinished line, so that an error message starts on its own.
     fn interrupt(&self) {
-        let ticks = *self
-            .ticks
+        let ticks = self
+            .line
             .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner());
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .ticks;
         if (0..40).contains(&ticks) {
             eprintln!();
         }
@@ -331,15 +370,13 @@ fn main() -> ExitCode {
         dataset_options: cli.dsco,
         layer_options: cli.lco,
     };
-    let progress = TermProgress {
-        ticks: Mutex::new(-1),
-    };
+    let progress = TermProgress::new();
     let quiet = cli.quiet;
     let caught = catch_signals();
     let interrupted = || caught.load(Ordering::SeqCst) as c_int;
     // A caught signal cancels the run through its progress reports, as a host's callback would.
-    let result = io::run(&job, &params, &|fraction, _| {
-        interrupted() == 0 && (quiet || progress.update(fraction))
+    let result = io::run(&job, &params, &|fraction, stage| {
+        interrupted() == 0 && (quiet || progress.update(fraction, stage))
     });
     let signal = interrupted();
     if signal != 0 {

@@ -13,7 +13,7 @@
 //!
 //! The sparse graph starts with each region's [`NEAREST`] best cells plus one perfect matching
 //! (regions and cells paired in x order), so an augmenting path always exists. "Best" is by
-//! reduced cost under prices estimated from the same problem on a random quarter of the points
+//! reduced cost under prices estimated from the same problem on a random half of the points
 //! and cells, solved the same way (recursively): with squared distances the prices follow a
 //! transport potential that a subsample of both sides shares, and starting from it the
 //! candidates already point the long way where densities differ. When every region has a cell,
@@ -30,18 +30,24 @@ use rstar::{primitives::GeomWithData, RTree};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+use super::Tick;
+
 /// Up to this many regions the dense solver is used. Measured on crowded and uniform synthetic
 /// cases, the sparse one overtakes it between 300 and 600 regions when densities differ.
 const DENSE_LIMIT: usize = 500;
 
 /// Candidate cells per region that the sparse solver starts with.
-const NEAREST: usize = 16;
+const NEAREST: usize = 40;
 
 /// Candidate cells a region gains per round when it has negative reduced costs.
 const GAINED: usize = 8;
 
 /// Problems smaller than this start from zero prices rather than a coarser problem's.
 const COARSEST: usize = 256;
+
+/// Shortest-path searches between two questions to the tick: a few milliseconds on 100,000
+/// regions, so that a cancel is heard well within 0.2 s.
+const TICK_ROWS: usize = 64;
 
 /// Marks a free row or column.
 const NONE: usize = usize::MAX;
@@ -56,9 +62,13 @@ type LiftedTree = RTree<GeomWithData<[f64; 3], usize>>;
 /// large coordinates) costs more than every finite one, so every cost the solvers see is finite,
 /// and a complete set of finite costs always has an optimal assignment.
 ///
+/// `tick` hears the share of the work done since it was last called and stops the search (the
+/// result is then `None`) when it returns false; it is asked at least every [`TICK_ROWS`]
+/// shortest-path searches.
+///
 /// # Panics
 /// If `points` and `cells` differ in length.
-pub fn assign(points: &[Coord<f64>], cells: &[Coord<f64>]) -> Vec<usize> {
+pub fn assign(points: &[Coord<f64>], cells: &[Coord<f64>], tick: Tick) -> Option<Vec<usize>> {
     assert_eq!(
         points.len(),
         cells.len(),
@@ -66,11 +76,13 @@ pub fn assign(points: &[Coord<f64>], cells: &[Coord<f64>]) -> Vec<usize> {
     );
     let costs = Costs::new(points, cells);
     if points.len() <= DENSE_LIMIT {
-        dense(&costs)
+        // At most 500², a few milliseconds: asked once.
+        let cells = dense(&costs);
+        tick(1.0).then_some(cells)
     } else {
         // The sampling only decides how fast the optimum is found, never which it is; a fixed
         // seed keeps even the choice among tied optima reproducible.
-        Sparse::solved(&costs, &mut ChaCha8Rng::seed_from_u64(0)).col_of
+        Sparse::solved(&costs, &mut ChaCha8Rng::seed_from_u64(0), tick).map(|s| s.col_of)
     }
 }
 
@@ -174,11 +186,11 @@ impl PartialOrd for Entry {
 }
 
 impl<'a> Sparse<'a> {
-    /// Solves the problem, starting from the prices of a coarser one.
-    fn solved(costs: &'a Costs<'a>, rng: &mut ChaCha8Rng) -> Self {
-        let mut solver = Sparse::new(costs, estimated_prices(costs, rng));
-        solver.run();
-        solver
+    /// Solves the problem, starting from the prices of a coarser one; `None` when `tick`
+    /// cancels (see [`assign`]).
+    fn solved(costs: &'a Costs<'a>, rng: &mut ChaCha8Rng, tick: Tick) -> Option<Self> {
+        let mut solver = Sparse::new(costs, estimated_prices(costs, rng, tick)?);
+        solver.run(tick).then_some(solver)
     }
 
     fn new(costs: &'a Costs<'a>, prices: Vec<f64>) -> Self {
@@ -226,16 +238,34 @@ impl<'a> Sparse<'a> {
         }
     }
 
-    /// Assigns every row optimally.
-    fn run(&mut self) {
+    /// Assigns every row optimally; false when `tick` cancels. The first round, which assigns
+    /// every row, counts as the whole work: the rounds after it are few and short.
+    fn run(&mut self, tick: Tick) -> bool {
+        let n = self.costs.len();
+        let mut first = true;
         loop {
-            for row in 0..self.costs.len() {
+            let mut searches = 0;
+            for row in 0..n {
                 if self.col_of[row] == NONE {
                     self.augment(row);
+                    searches += 1;
+                    if searches % TICK_ROWS == 0
+                        && !tick(if first {
+                            TICK_ROWS as f64 / n as f64
+                        } else {
+                            0.0
+                        })
+                    {
+                        return false;
+                    }
                 }
             }
+            first = false;
             if !self.widen() {
-                return;
+                return true;
+            }
+            if !tick(0.0) {
+                return false;
             }
         }
     }
@@ -346,31 +376,33 @@ impl<'a> Sparse<'a> {
 /// Column prices for `costs` from the same problem on a random quarter of its points and cells:
 /// every cell takes the price of the nearest sampled cell. Subsampling both sides alike keeps
 /// their densities, so the prices approximate the same transport potential.
-fn estimated_prices(costs: &Costs, rng: &mut ChaCha8Rng) -> Vec<f64> {
+fn estimated_prices(costs: &Costs, rng: &mut ChaCha8Rng, tick: Tick) -> Option<Vec<f64>> {
     let n = costs.len();
     if n < COARSEST {
-        return vec![0.0; n];
+        return Some(vec![0.0; n]);
     }
     let mut sample = |coords: &[Coord<f64>]| -> Vec<Coord<f64>> {
         let mut order: Vec<usize> = (0..n).collect();
         order.shuffle(rng);
-        order[..n / 4].iter().map(|&k| coords[k]).collect()
+        order[..n / 2].iter().map(|&k| coords[k]).collect()
     };
     let (points, cells) = (sample(costs.points), sample(costs.cells));
     let coarse = Costs::new(&points, &cells);
-    let prices = Sparse::solved(&coarse, rng).v;
+    // The coarse problem's share of the work is not counted: only a cancel is heard.
+    let prices = Sparse::solved(&coarse, rng, &|_| tick(0.0))?.v;
     let tree = RTree::bulk_load(
         (cells.iter().enumerate())
             .filter(|(_, c)| finite(**c))
             .map(|(k, c)| GeomWithData::new([c.x, c.y], k))
             .collect(),
     );
-    (costs.cells.iter())
+    let prices = (costs.cells.iter())
         .map(|c| match tree.nearest_neighbor(&[c.x, c.y]) {
             Some(sampled) if finite(*c) => prices[sampled.data],
             _ => 0.0,
         })
-        .collect()
+        .collect();
+    Some(prices)
 }
 
 fn finite(c: Coord<f64>) -> bool {
@@ -484,10 +516,34 @@ mod tests {
         (points, cells)
     }
 
+    fn solve(points: &[Coord<f64>], cells: &[Coord<f64>]) -> Vec<usize> {
+        assign(points, cells, &|_| true).unwrap()
+    }
+
+    #[test]
+    fn a_cancel_stops_the_search_and_the_shares_add_up_to_at_most_one() {
+        let mut rng = ChaCha8Rng::seed_from_u64(10);
+        let (points, cells) = crowded(&mut rng, 4 * DENSE_LIMIT);
+        let asked = std::sync::atomic::AtomicUsize::new(0);
+        let cancelled = assign(&points, &cells, &|_| {
+            asked.fetch_add(1, std::sync::atomic::Ordering::Relaxed) < 3
+        });
+        assert_eq!(cancelled, None);
+        assert_eq!(asked.load(std::sync::atomic::Ordering::Relaxed), 4);
+        let total = std::sync::Mutex::new(0.0);
+        let found = assign(&points, &cells, &|share| {
+            *total.lock().unwrap() += share;
+            true
+        });
+        assert!(found.is_some_and(|f| is_permutation(&f)));
+        let total = *total.lock().unwrap();
+        assert!(total > 0.5 && total <= 1.0 + 1e-9, "{total}");
+    }
+
     fn sparse(points: &[Coord<f64>], cells: &[Coord<f64>]) -> Vec<usize> {
         let costs = Costs::new(points, cells);
         let mut solver = Sparse::new(&costs, vec![0.0; costs.len()]);
-        solver.run();
+        assert!(solver.run(&|_| true));
         solver.col_of
     }
 
@@ -500,7 +556,7 @@ mod tests {
                 let best = (permutations(n).iter())
                     .map(|p| total(&points, &cells, p))
                     .fold(f64::INFINITY, f64::min);
-                for found in [assign(&points, &cells), sparse(&points, &cells)] {
+                for found in [solve(&points, &cells), sparse(&points, &cells)] {
                     assert!(is_permutation(&found), "{found:?}");
                     let cost = total(&points, &cells, &found);
                     assert!((cost - best).abs() < 1e-9, "n = {n}: {cost} > {best}");
@@ -515,7 +571,7 @@ mod tests {
         for n in [20, 150, 400] {
             let uniform = (random_points(&mut rng, n), random_points(&mut rng, n));
             for (points, cells) in [uniform, crowded(&mut rng, n)] {
-                let (dense, sparse) = (assign(&points, &cells), sparse(&points, &cells));
+                let (dense, sparse) = (solve(&points, &cells), sparse(&points, &cells));
                 assert!(is_permutation(&sparse));
                 let (a, b) = (
                     total(&points, &cells, &dense),
@@ -534,8 +590,8 @@ mod tests {
         let (points, cells) = crowded(&mut rng, DENSE_LIMIT + 50);
         let costs = Costs::new(&points, &cells);
         let mut solver = Sparse::new(&costs, vec![0.0; costs.len()]);
-        solver.run();
-        assert_eq!(assign(&points, &cells), solver.col_of);
+        assert!(solver.run(&|_| true));
+        assert_eq!(solve(&points, &cells), solver.col_of);
         assert!(is_permutation(&solver.col_of));
         let cost = total(&points, &cells, &solver.col_of);
         let bound: f64 = solver.u.iter().chain(&solver.v).sum();
@@ -552,14 +608,14 @@ mod tests {
         // Points at 0 and 1, cells at 2 and 1: both assignments move 2 in plain distance, but
         // squared, each point moving by 1 (1 + 1) beats one moving by 2 (4 + 0).
         let at = |x: f64| Coord { x, y: 0.0 };
-        assert_eq!(assign(&[at(0.0), at(1.0)], &[at(2.0), at(1.0)]), vec![1, 0]);
+        assert_eq!(solve(&[at(0.0), at(1.0)], &[at(2.0), at(1.0)]), vec![1, 0]);
     }
 
     #[test]
     fn a_non_finite_point_still_gets_a_cell() {
         let at = |x: f64| Coord { x, y: 0.0 };
         let (points, cells) = ([at(f64::NAN), at(0.9)], [at(1.0), at(5.0)]);
-        assert_eq!(assign(&points, &cells), vec![1, 0]);
+        assert_eq!(solve(&points, &cells), vec![1, 0]);
         assert_eq!(sparse(&points, &cells), vec![1, 0]);
     }
 }

@@ -32,7 +32,7 @@ impl SnakeNetwork {
     /// The network of `regions` with `params`' outline settings.
     pub fn of(regions: &[Region], params: &Params) -> Result<SnakeNetwork, Error> {
         params.validate().map_err(Error::InvalidParameter)?;
-        let input = Input::of(regions, params)?;
+        let input = Input::of(regions, params, &|_, _| true)?;
         let prepared = &input.prepared;
         let network = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
         let neighbours = forces::neighbours(&network, &prepared.adjacency);

@@ -94,6 +94,10 @@ impl std::error::Error for Error {}
 /// threads, hence `Sync`.
 pub type Progress<'a> = &'a (dyn Fn(f64, &str) -> bool + Sync);
 
+/// What a long step inside one layout (the assignment, the refinement) reports as it goes: the
+/// share of its work done since the last call; returning `false` stops the step.
+type Tick<'a> = &'a dyn Fn(f64) -> bool;
+
 /// Why the Snake stopped (method.md §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]

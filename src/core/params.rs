@@ -38,6 +38,9 @@ pub struct Params {
     pub point_adjacency: bool,
     pub shifts: Vec<[f64; 2]>,
     pub noise_levels: Vec<f64>,
+    /// Most candidate layouts; `None`: [`Params::layout_budget`] decides by the number of
+    /// regions.
+    pub max_layouts: Option<usize>,
     pub seed: u64,
     pub refine: bool,
     pub refine_moves_per_region: usize,
@@ -76,6 +79,7 @@ impl Default for Params {
                 .flat_map(|&x| [0.0, 0.33, 0.67].map(|y| [x, y]))
                 .collect(),
             noise_levels: vec![0.02, 0.04],
+            max_layouts: None,
             seed: 0,
             refine: true,
             refine_moves_per_region: 800,
@@ -673,6 +677,34 @@ pub static PARAMETERS: &[Parameter] = &[
         ),
     },
     Parameter {
+        name: "max_layouts",
+        kind: Kind::Integer { bits: 32 },
+        optional: true,
+        min: closed(1.0),
+        max: closed(1000.0),
+        unit: "layouts",
+        group: Group::Candidates,
+        advanced: true,
+        summary: "Most candidate layouts",
+        help: "How many of the (Snake run, shift) pairs are laid out and ranked, taken with the \
+             Snake runs in turn and the shifts spread over the cell. none: every pair up to \
+             1,000 regions, then about 27,000 / regions (at least 1), since the lattice's \
+             position matters less the more regions share it.",
+        access: (
+            |p| {
+                p.max_layouts
+                    .map_or(Value::Unset, |v| Value::Integer(v as u64))
+            },
+            |p, v| {
+                p.max_layouts = match v {
+                    // The range check has kept the value within 1..=1000.
+                    Value::Integer(v) => Some(v as usize),
+                    _ => None,
+                }
+            },
+        ),
+    },
+    Parameter {
         name: "seed",
         kind: Kind::Integer { bits: 64 },
         optional: false,
@@ -878,7 +910,25 @@ pub fn parameter(name: &str) -> Option<&'static Parameter> {
     PARAMETERS.iter().find(|p| p.name == name)
 }
 
+/// Region-layouts (regions × candidate layouts) the default budget allows: 27 layouts (three
+/// Snake runs, nine shifts) up to 1,000 regions, fewer beyond. The best of 27 layouts of the
+/// 3,107 US counties is the first noise-free one, and the 27 differ by at most 0.013 in
+/// adjacency and 0.03 cells in location (QUALITY.md, BENCHMARKS.md): with thousands of
+/// regions the lattice's position averages out, while the cost grows with every layout.
+const REGION_LAYOUTS: usize = 27_000;
+
 impl Params {
+    /// How many candidate layouts a run on `regions` regions makes: `max_layouts`, or by the
+    /// number of regions; never more than the (Snake run, shift) pairs there are.
+    pub fn layout_count(&self, regions: usize) -> usize {
+        let runs = 1 + self.noise_levels.iter().filter(|&&md| md > 0.0).count();
+        let pairs = runs * self.shifts.len();
+        let budget = self
+            .max_layouts
+            .unwrap_or_else(|| REGION_LAYOUTS.div_ceil(regions.max(1)));
+        budget.clamp(1, pairs.max(1))
+    }
+
     /// Checks every value against its range in [`PARAMETERS`]; the message names the parameter.
     pub fn validate(&self) -> Result<(), String> {
         for parameter in PARAMETERS {

@@ -19,7 +19,7 @@ pub fn score(
             format!("{} cells for {} regions", cells.len(), regions.len()),
         ));
     }
-    let input = Input::of(regions, &Params::default())?;
+    let input = Input::of(regions, &Params::default(), &|_, _| true)?;
     let mut centres = Vec::with_capacity(cells.len());
     for &i in &input.order {
         let centre = cells[i]

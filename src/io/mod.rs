@@ -165,6 +165,7 @@ fn run_in(
     let json_staging = stage(json_destination, "JSON report")?;
     let svg_staging = stage(svg_destination, "picture")?;
 
+    step(0.0, "reading")?;
     let Source {
         id_field,
         label_field,
@@ -182,7 +183,7 @@ fn run_in(
         let pairs: Vec<(&str, &Feature)> = ids.iter().copied().zip(&features).collect();
         trial.ids(&fields, &pairs, position)?;
     }
-    step(READ_SHARE, "laying out")?;
+    step(READ_SHARE, "checking geometry")?;
 
     let layout_share = 1.0 - READ_SHARE - WRITE_SHARE;
     let map = crate::core::generate(&regions, params, &|fraction, message| {

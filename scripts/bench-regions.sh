@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# How the command line's time and peak memory grow with the number of regions: random Voronoi
+# layers (scripts/make-test-layers.py) of 1,000 to 100,000 regions, each laid out with the
+# defaults (or the options given), wall time as the median of 5 runs where one takes under a
+# minute (else one run), peak resident memory from GNU time, and the growth exponent fitted to
+# time ∝ n^k between successive sizes. Prints a Markdown table for BENCHMARKS.md.
+#
+# Usage: scripts/bench-regions.sh [SIZES] [SNAKEGRID OPTIONS...]
+#        SIZES: comma-separated, default 1000,3000,10000,33000,100000
+# Needs GNU time (/usr/bin/time, Debian's `time`), Python 3 with shapely, numpy and pyogrio.
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+sizes="${1:-1000,3000,10000,33000,100000}"
+shift || true
+cli="$root/target/release/snakegrid"
+[ -x "$cli" ] || cargo build --manifest-path "$root/Cargo.toml" --release --bin snakegrid
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+
+echo "snakegrid $(git -C "$root" describe --always --dirty), $(date -u +%F), load $(cut -d' ' -f1-3 /proc/loadavg), options: ${*:-defaults}"
+echo
+echo "| regions | runs | median wall (s) | peak memory (MB) | growth k (time ∝ n^k) |"
+echo "|---:|---:|---:|---:|---:|"
+previous=""
+for n in ${sizes//,/ }; do
+    layer="$work/voronoi_$n.gpkg"
+    python3 "$root/scripts/make-test-layers.py" voronoi "$n" 1 "$layer"
+    times=()
+    memory=0
+    runs=0
+    while [ "$runs" -lt 5 ]; do
+        /usr/bin/time -f "%e %M" -o "$work/time" "$cli" -q -overwrite "$@" "$work/out.gpkg" "$layer"
+        read -r seconds kb < "$work/time"
+        times+=("$seconds")
+        [ "$kb" -gt "$memory" ] && memory=$kb
+        runs=$((runs + 1))
+        awk -v s="$seconds" 'BEGIN { exit !(s >= 60) }' && break
+    done
+    median="$(printf '%s\n' "${times[@]}" | sort -g | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')"
+    growth="–"
+    if [ -n "$previous" ]; then
+        growth="$(awk -v n="$n" -v t="$median" -v pn="${previous% *}" -v pt="${previous#* }" \
+            'BEGIN { printf "%.2f", log(t / pt) / log(n / pn) }')"
+    fi
+    printf '| %s | %s | %s | %s | %s |\n' "$n" "$runs" "$median" "$((memory / 1024))" "$growth"
+    previous="$n $median"
+done
