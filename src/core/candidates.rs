@@ -193,6 +193,10 @@ fn generate_here(
         })
         .collect::<Result<Vec<_>, Error>>()?;
 
+    // Whatever rounding left of the count: the layouts are done.
+    if !progress(1.0, "ranking the layouts") {
+        return Err(Error::Cancelled);
+    }
     let scores = rank::topsis(
         &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
         params.topsis_weights,
@@ -617,7 +621,7 @@ impl Context<'_> {
                 targets: &targets,
                 lattice: &lattice,
                 part_of,
-                misplaced: &misplaced,
+                misplaced: self.home.any_counted().then_some(&misplaced),
             };
             let Some(refined) = refine::refine(&layout, &cells, self.params, seed, &|done| {
                 report(Stage::Refining, done)

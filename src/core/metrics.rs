@@ -97,6 +97,11 @@ impl Landmasses {
         }
     }
 
+    /// Whether any region counts for the wrong-landmass share (two landmasses of 3+ regions).
+    pub fn any_counted(&self) -> bool {
+        self.counted.contains(&true)
+    }
+
     /// Whether region `region` counts for the wrong-landmass share (its landmass holds 3+
     /// regions, and another one does too).
     pub fn counts(&self, region: usize) -> bool {

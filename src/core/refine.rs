@@ -38,8 +38,10 @@ pub struct Layout<'a> {
     pub lattice: &'a Lattice,
     /// Per region, its landmass: a region only ever takes a cell of its own.
     pub part_of: &'a [usize],
-    /// Whether region `i` at a position would lie nearer another landmass than its own.
-    pub misplaced: &'a dyn Fn(usize, Position) -> bool,
+    /// Whether region `i` at a position would lie nearer another landmass than its own; `None`
+    /// when no region can (fewer than two landmasses count), which spares the refinement a
+    /// cache lookup per proposal (a quarter of its time on 10,000 regions).
+    pub misplaced: Option<&'a dyn Fn(usize, Position) -> bool>,
 }
 
 /// Improves `cells` (per region, an index into `layout.lattice.cells`) and returns the new
@@ -169,6 +171,10 @@ fn anneal(
             since_best.clear();
         }
     }
+    // The moves after the last tick complete the share.
+    if !tick((moves % TICK_MOVES) as f64 / moves.max(1) as f64) {
+        return None;
+    }
     for undo in since_best.into_iter().rev() {
         board.apply(undo);
     }
@@ -242,11 +248,13 @@ impl<'a> Problem<'a> {
         let centre = self.layout.lattice.centre(cell.col, cell.row);
         let offset = self.layout.targets[region] - centre;
         let position = (cell.col, cell.row);
-        let misplaced = *self
-            .misplaced
-            .borrow_mut()
-            .entry((region, position))
-            .or_insert_with(|| (self.layout.misplaced)(region, position));
+        let misplaced = self.layout.misplaced.is_some_and(|misplaced| {
+            *self
+                .misplaced
+                .borrow_mut()
+                .entry((region, position))
+                .or_insert_with(|| misplaced(region, position))
+        });
         self.w_location * (offset.x * offset.x + offset.y * offset.y)
             + if misplaced { self.w_landmass } else { 0.0 }
     }
@@ -595,11 +603,6 @@ mod tests {
     use super::*;
     use rand::seq::SliceRandom;
 
-    /// No region is ever on the wrong landmass.
-    fn nowhere(_: usize, _: Position) -> bool {
-        false
-    }
-
     /// A `cols` × `rows` block of cells of score 2 in reading order, origin (0, rows), with a
     /// frame of `frame` extra cells of score 1 around it (after the block in the list).
     fn lattice(cols: i32, rows: i32, frame: i32) -> Lattice {
@@ -675,7 +678,7 @@ mod tests {
                 targets: &self.centroids,
                 lattice: &self.lattice,
                 part_of: &self.part_of,
-                misplaced: &nowhere,
+                misplaced: None,
             }
         }
     }
@@ -862,6 +865,30 @@ mod tests {
     }
 
     #[test]
+    fn the_ticks_add_up_to_the_whole_and_a_cancel_stops_it() {
+        let (map, cells) = scrambled(10, 10, 5);
+        let layout = map.layout();
+        // 100 regions × 100 moves: two ticks of 4,096 moves and the rest.
+        let params = Params {
+            refine_moves_per_region: 100,
+            ..Params::default()
+        };
+        let shares = std::cell::RefCell::new(Vec::new());
+        refine(&layout, &cells, &params, 3, &|share| {
+            shares.borrow_mut().push(share);
+            true
+        })
+        .unwrap();
+        let shares = shares.into_inner();
+        assert_eq!(shares.len(), 3);
+        assert!(
+            (shares.iter().sum::<f64>() - 1.0).abs() < 1e-12,
+            "{shares:?}"
+        );
+        assert_eq!(refine(&layout, &cells, &params, 3, &|_| false), None);
+    }
+
+    #[test]
     fn deterministic_for_a_seed() {
         let (map, cells) = scrambled(6, 6, 5);
         let layout = map.layout();
@@ -886,7 +913,7 @@ mod tests {
             targets: &[],
             lattice: &map.lattice,
             part_of: &[],
-            misplaced: &nowhere,
+            misplaced: None,
         };
         assert!(refine(&empty, &[], &Params::default(), 1, &|_| true)
             .unwrap()
