@@ -28,9 +28,11 @@ fi
 command -v cargo-zigbuild >/dev/null || cargo install --locked cargo-zigbuild@0.24.1
 
 # cargo-zigbuild finds zig through `python3 -m ziglang`: the tools venv's python3 comes first.
+# A target folder of its own, so that this build may run beside another cargo command (CI
+# starts it in the background) without either waiting for the other's lock.
 PATH="$tools/bin:$PATH" cargo zigbuild --manifest-path "$root/Cargo.toml" --release --lib \
-    --no-default-features --target "$target.$glibc"
-library="$root/target/$target/release/libsnakegrid.so"
+    --no-default-features --target "$target.$glibc" --target-dir "$root/target/wheel"
+library="$root/target/wheel/$target/release/libsnakegrid.so"
 if ldd "$library" | grep -q gdal; then
     echo "build-wheel: $library links GDAL" >&2
     exit 1

@@ -14,7 +14,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 sys.path[:0] = [os.path.join(ROOT, "qgis-plugin"), os.path.join(ROOT, "python"),
                 "/usr/share/qgis/python/plugins"]
 os.environ.setdefault("SNAKEGRID_LIBRARY", os.path.join(
-    ROOT, "target", "x86_64-unknown-linux-gnu", "release", "libsnakegrid.so"))
+    ROOT, "target", "wheel", "x86_64-unknown-linux-gnu", "release", "libsnakegrid.so"))
 DATA = os.environ.get("SNAKEGRID_DATA_DIR", os.path.join(os.path.dirname(ROOT), "shared", "data"))
 from qgis.core import QgsApplication, QgsVectorLayer, QgsProject
 from qgis.PyQt.QtCore import QTimer
