@@ -122,9 +122,7 @@ fn generate_here(
     }
     // Snake runs that no layout uses are not made.
     levels.truncate(jobs.iter().map(|&(r, _)| r + 1).max().unwrap_or(1));
-    let weights = StageWeights {
-        refining: StageWeights::of_params(params),
-    };
+    let weights = StageWeights::new(params);
     let tracker = Tracker::new(
         progress,
         (levels.len() * params.max_steps) as f64 + jobs.len() as f64 * weights.layout(),
@@ -505,11 +503,13 @@ impl StageWeights {
     /// Per refinement move per region.
     const REFINING_PER_MOVE: f64 = 120.0 / 800.0;
 
-    fn of_params(params: &Params) -> f64 {
-        if params.refine {
-            Self::REFINING_PER_MOVE * params.refine_moves_per_region as f64
-        } else {
-            0.0
+    fn new(params: &Params) -> Self {
+        StageWeights {
+            refining: if params.refine {
+                Self::REFINING_PER_MOVE * params.refine_moves_per_region as f64
+            } else {
+                0.0
+            },
         }
     }
 
