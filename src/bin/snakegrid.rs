@@ -210,16 +210,16 @@ impl TermProgress {
     }
 
     fn update(&self, fraction: f64, stage: &str) -> bool {
-        // The line starts once the source is read: a source refused while it is read (ids the
-        // output cannot store, say) gets the error line alone.
-        if stage == "reading" {
-            return true;
-        }
         // The lock is held while printing, or two threads could print their parts swapped.
         let mut line = self
             .line
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
+        // The line starts with the first work done: a source refused while it is read (ids the
+        // output cannot store, say) gets the error line alone.
+        if line.ticks < 0 && fraction <= 0.0 {
+            return true;
+        }
         let text = advance(&mut line.ticks, fraction);
         let restage = self.terminal && line.ticks < 40 && stage != line.stage;
         if text.is_empty() && !restage {

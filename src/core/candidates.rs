@@ -101,8 +101,7 @@ fn generate_here(
     } = Input::of(regions, params, progress)?;
     let base = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
 
-    let mut levels = vec![0.0];
-    levels.extend(params.noise_levels.iter().copied().filter(|&md| md > 0.0));
+    let mut levels = params.snake_noise_levels();
     let jobs = layout_jobs(
         levels.len(),
         &params.shifts,
@@ -139,22 +138,21 @@ fn generate_here(
                 network::build(&centroids, &prepared.rings, &prepared.adjacency)?
             };
             let neighbours = forces::neighbours(&network, &prepared.adjacency);
-            let step = AtomicUsize::new(0);
+            let started = AtomicUsize::new(0);
             let run = snake::run(&network, &neighbours, params, &|| {
-                let done = step.fetch_add(1, Ordering::Relaxed);
+                let step = started.fetch_add(1, Ordering::Relaxed) + 1;
                 let of_run = if run_count > 1 {
                     format!(" (run {} of {run_count})", k + 1)
                 } else {
                     String::new()
                 };
-                let message = format!("Snake step {} of {}{of_run}", done + 1, params.max_steps);
-                // Each step is counted when it starts: the first call reports nothing done.
-                tracker.advance(if done == 0 { 0.0 } else { 1.0 }, &message)
+                let message = format!("Snake step {step} of {}{of_run}", params.max_steps);
+                // Each step counts as it starts.
+                tracker.advance(1.0, &message)
             })?;
-            // Runs that stop early hand their unused steps to the progress count (the last
-            // step counts here too).
-            let unused = params.max_steps - run.report.steps.min(params.max_steps);
-            tracker.advance((unused + usize::from(run.report.steps > 0)) as f64, "Snake");
+            // A run that stops early hands its steps never started to the progress count.
+            let unused = params.max_steps.saturating_sub(started.into_inner());
+            tracker.advance(unused as f64, "Snake");
             Ok((md, network, run))
         })
         .collect::<Result<Vec<_>, Error>>()?;
@@ -181,9 +179,7 @@ fn generate_here(
                     &format!("{name}: {}", stage.name()),
                 )
             };
-            let layout = context
-                .layout(network, run, shift, seed(params.seed, 2, k), &report)?
-                .ok_or(Error::Cancelled)?;
+            let layout = context.layout(network, run, shift, seed(params.seed, 2, k), &report)?;
             if !report(Stage::Scoring, 1.0) {
                 return Err(Error::Cancelled);
             }
@@ -549,7 +545,8 @@ struct Context<'a> {
 }
 
 impl Context<'_> {
-    /// Lattice, assignment, refinement and metrics for one Snake run and one origin shift (§6).
+    /// Lattice, assignment, refinement and metrics for one Snake run and one origin shift (§6);
+    /// [`Error::Cancelled`] once `report` returns false.
     fn layout(
         &self,
         network: &Network,
@@ -557,7 +554,7 @@ impl Context<'_> {
         shift: [f64; 2],
         seed: u64,
         report: &dyn Fn(Stage, f64) -> bool,
-    ) -> Result<Option<Layout>, Error> {
+    ) -> Result<Layout, Error> {
         let m = network.centroids;
         let moved = &run.positions[..m];
         let moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
@@ -593,11 +590,10 @@ impl Context<'_> {
                 .collect();
             // Each landmass's share of the assignment is its share of the regions.
             let share = regions.len() as f64 / m as f64;
-            let Some(choices) = assign::assign(&points, &centres, &|done| {
+            let choices = assign::assign(&points, &centres, &|done| {
                 report(Stage::Assigning, done * share)
-            }) else {
-                return Ok(None);
-            };
+            })
+            .ok_or(Error::Cancelled)?;
             for (&region, choice) in regions.iter().zip(choices) {
                 cells[region] = own[choice];
             }
@@ -623,21 +619,19 @@ impl Context<'_> {
                 part_of,
                 misplaced: self.home.any_counted().then_some(&misplaced),
             };
-            let Some(refined) = refine::refine(&layout, &cells, self.params, seed, &|done| {
+            cells = refine::refine(&layout, &cells, self.params, seed, &|done| {
                 report(Stage::Refining, done)
-            }) else {
-                return Ok(None);
-            };
-            cells = refined;
+            })
+            .ok_or(Error::Cancelled)?;
         }
         let (metrics, region_metrics) = self.evaluate(&lattice, &cells, moved);
-        Ok(Some(Layout {
+        Ok(Layout {
             lattice,
             cells,
             metrics,
             region_metrics,
             moved_outline,
-        }))
+        })
     }
 
     /// The §8 metrics, in map units.

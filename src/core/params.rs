@@ -403,16 +403,6 @@ impl Parameter {
 /// Shorthand for the table's accessors: `accessors!(name, Variant)` reads and writes `Params::name`
 /// as `Value::Variant`.
 macro_rules! accessors {
-    ($field:ident, Real) => {
-        (
-            |p| Value::Real(p.$field),
-            |p, v| {
-                if let Value::Real(v) = v {
-                    p.$field = v
-                }
-            },
-        )
-    };
     ($field:ident, Integer) => {
         (
             |p| Value::Integer(p.$field as u64),
@@ -424,11 +414,11 @@ macro_rules! accessors {
             },
         )
     };
-    ($field:ident, Bool) => {
+    ($field:ident, $variant:ident) => {
         (
-            |p| Value::Bool(p.$field),
+            |p| Value::$variant(Clone::clone(&p.$field)),
             |p, v| {
-                if let Value::Bool(v) = v {
+                if let Value::$variant(v) = v {
                     p.$field = v
                 }
             },
@@ -645,14 +635,7 @@ pub static PARAMETERS: &[Parameter] = &[
         summary: "Lattice origin shifts",
         help: "Shifts x:y of the lattice's origin (x right, y down), as fractions of a cell: one \
              candidate layout each (Strategy 2).",
-        access: (
-            |p| Value::Pairs(p.shifts.clone()),
-            |p, v| {
-                if let Value::Pairs(v) = v {
-                    p.shifts = v
-                }
-            },
-        ),
+        access: accessors!(shifts, Pairs),
     },
     Parameter {
         name: "noise_levels",
@@ -667,14 +650,7 @@ pub static PARAMETERS: &[Parameter] = &[
         help: "Noise levels MD of the extra Snake runs (Strategy 1): each moves every centroid by \
              Gaussian noise of MD times its mean neighbour distance; the noise-free run is \
              always made.",
-        access: (
-            |p| Value::Reals(p.noise_levels.clone()),
-            |p, v| {
-                if let Value::Reals(v) = v {
-                    p.noise_levels = v
-                }
-            },
-        ),
+        access: accessors!(noise_levels, Reals),
     },
     Parameter {
         name: "max_layouts",
@@ -918,11 +894,16 @@ pub fn parameter(name: &str) -> Option<&'static Parameter> {
 const REGION_LAYOUTS: usize = 27_000;
 
 impl Params {
+    /// The noise level of each Snake run: the noise-free run, then each positive level.
+    pub fn snake_noise_levels(&self) -> Vec<f64> {
+        let noisy = self.noise_levels.iter().copied().filter(|&md| md > 0.0);
+        std::iter::once(0.0).chain(noisy).collect()
+    }
+
     /// How many candidate layouts a run on `regions` regions makes: `max_layouts`, or by the
     /// number of regions; never more than the (Snake run, shift) pairs there are.
     pub fn layout_count(&self, regions: usize) -> usize {
-        let runs = 1 + self.noise_levels.iter().filter(|&&md| md > 0.0).count();
-        let pairs = runs * self.shifts.len();
+        let pairs = self.snake_noise_levels().len() * self.shifts.len();
         let budget = self
             .max_layouts
             .unwrap_or_else(|| REGION_LAYOUTS.div_ceil(regions.max(1)));
