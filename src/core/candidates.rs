@@ -10,11 +10,12 @@ use super::metrics::{self, Scored};
 use super::network::{self, Network};
 use super::outline::{self, Prepared};
 use super::snake::{self, SnakeRun};
+use super::validity::{self, Problem};
 use super::{
     assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params, Progress,
     Region, RegionCell, RegionMetrics,
 };
-use geo::{Area, Centroid, Coord, CoordsIter, HasDimensions, MakeValid, MultiPolygon, Validation};
+use geo::{Area, Centroid, Coord, CoordsIter, HasDimensions, MakeValid, MultiPolygon};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -315,14 +316,13 @@ struct Checked<'r> {
 /// Refuses what the method cannot work with, naming the feature. An invalid polygon (a ring that
 /// crosses itself, a spike, overlapping parts) is repaired as GIS tools do (geo's `MakeValid`)
 /// and named in a note, because a digitising slip should not stop a map; only one with no area
-/// left is refused.
+/// left is refused. The geometries are checked in parallel; the first error in input order is
+/// the one reported.
 fn validate(regions: &[Region]) -> Result<Checked<'_>, Error> {
     if regions.is_empty() {
         return Err(Error::input(None, "the layer has no regions"));
     }
     let mut seen = HashSet::new();
-    let mut notes = Vec::new();
-    let mut geometries = Vec::with_capacity(regions.len());
     for region in regions {
         let id = region.id.as_str();
         if id.is_empty() {
@@ -334,47 +334,63 @@ fn validate(regions: &[Region]) -> Result<Checked<'_>, Error> {
                 "the id is used by more than one region",
             ));
         }
-        // Also a multipolygon of polygons without points (WKB allows one).
-        if region.geometry.is_empty() {
-            return Err(Error::input(Some(id), "the geometry is empty"));
-        }
-        if region
-            .geometry
-            .coords_iter()
-            .any(|c| !c.x.is_finite() || !c.y.is_finite())
-        {
-            return Err(Error::input(
-                Some(id),
-                "the geometry has a NaN or infinite coordinate",
-            ));
-        }
-        let geometry = match region.geometry.check_validation() {
-            Ok(()) => Cow::Borrowed(&region.geometry),
-            Err(problem) => {
-                let repaired = region.geometry.make_valid().map_err(|e| {
-                    Error::input(
-                        Some(id),
-                        format!("the polygon is invalid ({problem}) and cannot be repaired: {e}"),
-                    )
-                })?;
-                if !has_area(&repaired) {
-                    return Err(Error::input(
-                        Some(id),
-                        format!("the polygon has no area (it is invalid: {problem})"),
-                    ));
-                }
-                notes.push(format!(
-                    "feature {id}: invalid polygon repaired ({problem})"
-                ));
-                Cow::Owned(repaired)
-            }
-        };
-        if !has_area(&geometry) {
+    }
+    let checked = regions
+        .par_iter()
+        .map(validate_geometry)
+        .collect::<Result<Vec<_>, Error>>()?;
+    let notes = (regions.iter().zip(&checked))
+        .filter_map(|(region, (_, problem))| {
+            let problem = problem.as_ref()?;
+            Some(format!(
+                "feature {}: invalid polygon repaired ({problem})",
+                region.id
+            ))
+        })
+        .collect();
+    let geometries = checked.into_iter().map(|(g, _)| g).collect();
+    Ok(Checked { geometries, notes })
+}
+
+/// One region's geometry as the method takes it, repaired if it was invalid (with what was
+/// wrong).
+fn validate_geometry(
+    region: &Region,
+) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Problem>), Error> {
+    let id = region.id.as_str();
+    // Also a multipolygon of polygons without points (WKB allows one).
+    if region.geometry.is_empty() {
+        return Err(Error::input(Some(id), "the geometry is empty"));
+    }
+    if region
+        .geometry
+        .coords_iter()
+        .any(|c| !c.x.is_finite() || !c.y.is_finite())
+    {
+        return Err(Error::input(
+            Some(id),
+            "the geometry has a NaN or infinite coordinate",
+        ));
+    }
+    let Some(problem) = validity::problem(&region.geometry) else {
+        if !has_area(&region.geometry) {
             return Err(Error::input(Some(id), "the polygon has no area"));
         }
-        geometries.push(geometry);
+        return Ok((Cow::Borrowed(&region.geometry), None));
+    };
+    let repaired = region.geometry.make_valid().map_err(|e| {
+        Error::input(
+            Some(id),
+            format!("the polygon is invalid ({problem}) and cannot be repaired: {e}"),
+        )
+    })?;
+    if !has_area(&repaired) {
+        return Err(Error::input(
+            Some(id),
+            format!("the polygon has no area (it is invalid: {problem})"),
+        ));
     }
-    Ok(Checked { geometries, notes })
+    Ok((Cow::Owned(repaired), Some(problem)))
 }
 
 /// Written so that a NaN area counts as none.

@@ -4,7 +4,7 @@
 //! they work on plain coordinate rings rather than on geo polygons.
 
 use geo::kernels::{Kernel, Orientation, RobustKernel};
-use geo::{Coord, Rect};
+use geo::{Coord, Polygon, Rect};
 use rstar::{PointDistance, RTree, RTreeObject, AABB};
 
 /// Closed rings given as open coordinate chains (the last vertex joins the first).
@@ -100,6 +100,49 @@ pub fn segments_intersect(p1: Coord<f64>, p2: Coord<f64>, q1: Coord<f64>, q2: Co
     on(q1, q2, p1, d1) || on(q1, q2, p2, d2) || on(p1, p2, q1, d3) || on(p1, p2, q2, d4)
 }
 
+/// A point inside `polygon` (its holes respected): the middle of the widest span of a
+/// horizontal line at mid-height, moved to pass through no vertex. O(n log n), where geo's
+/// `InteriorPoint` intersects every segment with every other (minutes on a densified square).
+/// `None` for a polygon without height.
+pub fn interior_point(polygon: &Polygon<f64>) -> Option<Coord<f64>> {
+    let rings = || std::iter::once(polygon.exterior()).chain(polygon.interiors());
+    let levels = || rings().flat_map(|r| r.0.iter().map(|c| c.y));
+    let (low, high) = levels().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
+        (lo.min(y), hi.max(y))
+    });
+    // Halfway between the two vertex levels around the middle (found in one pass each).
+    let middle = (low + high) / 2.0;
+    let below = levels()
+        .filter(|&y| y <= middle)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let above = levels()
+        .filter(|&y| y > middle)
+        .fold(f64::INFINITY, f64::min);
+    if !(below.is_finite() && above.is_finite()) {
+        return None;
+    }
+    let y = (below + above) / 2.0;
+    let mut xs: Vec<f64> = rings()
+        .flat_map(|r| r.lines())
+        .filter(|l| (l.start.y > y) != (l.end.y > y))
+        .map(|l| l.start.x + (y - l.start.y) * (l.end.x - l.start.x) / (l.end.y - l.start.y))
+        .collect();
+    xs.sort_by(f64::total_cmp);
+    xs.chunks_exact(2)
+        .max_by(|a, b| (a[1] - a[0]).total_cmp(&(b[1] - b[0])))
+        .map(|span| Coord {
+            x: (span[0] + span[1]) / 2.0,
+            y,
+        })
+}
+
+/// Whether the ray from `p` towards +x crosses `s`; half-open in y, so that a ray through a
+/// vertex crosses one of its two segments.
+pub fn crosses_ray(s: &Segment, p: Coord<f64>) -> bool {
+    (s.a.y > p.y) != (s.b.y > p.y)
+        && p.x < s.a.x + (p.y - s.a.y) * (s.b.x - s.a.x) / (s.b.y - s.a.y)
+}
+
 /// A segment index over closed rings.
 pub struct RingIndex {
     tree: RTree<Segment>,
@@ -131,16 +174,11 @@ impl RingIndex {
         let Some(far) = self.tree.root().envelope().upper().first().copied() else {
             return false;
         };
-        // Count crossings of the ray from p towards +x; half-open in y so a vertex on the ray
-        // counts once.
         let ray = AABB::from_corners([p.x, p.y], [far.max(p.x), p.y]);
         let crossings = self
             .tree
             .locate_in_envelope_intersecting(&ray)
-            .filter(|s| {
-                (s.a.y > p.y) != (s.b.y > p.y)
-                    && p.x < s.a.x + (p.y - s.a.y) * (s.b.x - s.a.x) / (s.b.y - s.a.y)
-            })
+            .filter(|s| crosses_ray(s, p))
             .count();
         crossings % 2 == 1
     }
@@ -212,6 +250,26 @@ mod tests {
         assert!(!index.contains(Coord { x: 11.0, y: 5.0 }));
         // On the level of a vertex: counted once.
         assert!(index.contains(Coord { x: 2.0, y: 4.0 }));
+    }
+
+    #[test]
+    fn interior_points_lie_inside() {
+        use geo::{wkt, Contains, Point};
+        let cases = [
+            wkt!(POLYGON((0. 0.,4. 0.,4. 4.,0. 4.,0. 0.))),
+            // A U whose middle is empty: the point is in an arm.
+            wkt!(POLYGON((0. 0.,3. 0.,3. 3.,2. 3.,2. 1.,1. 1.,1. 3.,0. 3.,0. 0.))),
+            // A hole around the middle, and vertices at the middle level.
+            wkt!(POLYGON((0. 0.,4. 0.,4. 2.,4. 4.,0. 4.,0. 0.),(1. 1.,3. 1.,3. 3.,1. 3.,1. 1.))),
+        ];
+        for polygon in cases {
+            let p = interior_point(&polygon).expect("a point");
+            assert!(polygon.contains(&Point(p)), "{p:?} outside {polygon:?}");
+        }
+        assert_eq!(
+            interior_point(&wkt!(POLYGON((0. 0.,1. 0.,2. 0.,0. 0.)))),
+            None
+        );
     }
 
     #[test]

@@ -23,8 +23,11 @@ pub struct Reference {
     pub centroids: Vec<Coord<f64>>,
     /// Adjacent region pairs (i < j).
     pub adjacency: Vec<(usize, usize)>,
-    /// The union of the regions, for the shape similarity and the source's pieces and holes.
+    /// The union of the regions, for the source's pieces and holes.
     pub outline: MultiPolygon<f64>,
+    /// The Fourier descriptor of the largest part's outer ring, for the shape similarity (once
+    /// per run: a dense outline has millions of vertices).
+    pub shape: Option<Vec<f64>>,
     /// The regions' landmasses, for the wrong-landmass share.
     pub landmasses: Landmasses,
     /// S of the original map (sqrt(total area / M)), the unit of the paper's location variant.
@@ -34,15 +37,35 @@ pub struct Reference {
 impl Reference {
     /// The reference of the regions `prepared` describes, whose frame is `frame`.
     pub fn new(prepared: &Prepared, frame: Frame) -> Reference {
-        let outline = frame.polygons_to_map(&prepared.regions_union);
-        Reference {
-            centroids: (prepared.area_centroids.iter())
+        Reference::of(
+            (prepared.area_centroids.iter())
                 .map(|&c| frame.to_map(c))
                 .collect(),
-            adjacency: prepared.adjacency.clone(),
-            landmasses: Landmasses::new(&outline, prepared.landmass_of.clone()),
+            prepared.adjacency.clone(),
+            frame.polygons_to_map(&prepared.regions_union),
+            prepared.landmass_of.clone(),
+            frame.scale,
+        )
+    }
+
+    /// The reference of regions with these centroids, adjacent pairs, union, landmass (part of
+    /// `outline`) per region and S.
+    fn of(
+        centroids: Vec<Coord<f64>>,
+        adjacency: Vec<(usize, usize)>,
+        outline: MultiPolygon<f64>,
+        landmass_of: Vec<usize>,
+        unit: f64,
+    ) -> Reference {
+        Reference {
+            centroids,
+            adjacency,
+            landmasses: Landmasses::new(&outline, landmass_of),
+            shape: (outline.0.iter())
+                .max_by(|a, b| a.unsigned_area().total_cmp(&b.unsigned_area()))
+                .and_then(|p| descriptor(p.exterior())),
             outline,
-            unit: frame.scale,
+            unit,
         }
     }
 }
@@ -64,7 +87,8 @@ pub struct Scored<'a> {
 /// holding most of its area), indexed for distance queries: what the wrong-landmass share
 /// measures, and what the refinement avoids.
 pub struct Landmasses {
-    parts: Vec<RingIndex>,
+    /// Per part, its index if it counts (see `counted`): only those are measured from.
+    parts: Vec<Option<RingIndex>>,
     /// Per region, its part.
     of: Vec<usize>,
     /// Per part, whether it holds enough regions to count (3+), when two parts or more do.
@@ -79,22 +103,19 @@ impl Landmasses {
             sizes[k] += 1;
         }
         let big = sizes.iter().filter(|&&n| n >= LANDMASS_REGIONS).count();
-        let parts = parts
-            .0
+        let counted: Vec<bool> = sizes
             .iter()
-            .map(|p| {
-                let rings = super::outline::rings_of(&MultiPolygon(vec![p.clone()]));
-                RingIndex::new(&coords_of(&rings))
+            .map(|&n| big >= 2 && n >= LANDMASS_REGIONS)
+            .collect();
+        let parts = (parts.0.iter().zip(&counted))
+            .map(|(p, &counts)| {
+                counts.then(|| {
+                    let rings = super::outline::rings_of(&MultiPolygon(vec![p.clone()]));
+                    RingIndex::new(&coords_of(&rings))
+                })
             })
             .collect();
-        Landmasses {
-            parts,
-            of,
-            counted: sizes
-                .iter()
-                .map(|&n| big >= 2 && n >= LANDMASS_REGIONS)
-                .collect(),
-        }
+        Landmasses { parts, of, counted }
     }
 
     /// Whether any region counts for the wrong-landmass share (two landmasses of 3+ regions).
@@ -121,12 +142,12 @@ impl Landmasses {
                 .any(|k| k != own && self.counted[k] && self.distance(k, p) < home)
     }
 
-    /// Distance from `p` to part `k` (0 inside it).
+    /// Distance from `p` to part `k` (0 inside it), a counted one.
     fn distance(&self, k: usize, p: Coord<f64>) -> f64 {
-        if self.parts[k].contains(p) {
-            0.0
-        } else {
-            self.parts[k].distance(p, |_| false)
+        match &self.parts[k] {
+            Some(part) if part.contains(p) => 0.0,
+            Some(part) => part.distance(p, |_| false),
+            None => f64::INFINITY,
         }
     }
 }
@@ -549,21 +570,15 @@ fn ring_area(ring: &[Corner]) -> f64 {
 /// similarity = 1 − ‖d₁ − d₂‖₂ / (‖d₁‖₂ + ‖d₂‖₂) (method.md §8), in 0..=1, 1 for equal
 /// descriptors; 0 when either outline is degenerate.
 fn shape_similarity(layout: &Scored, shape: &LayoutShape) -> f64 {
-    let largest = layout
-        .reference
-        .outline
-        .0
-        .iter()
-        .max_by(|a, b| a.unsigned_area().total_cmp(&b.unsigned_area()));
     let (Some(cells), Some(regions)) = (
         cell_ring(layout, shape).and_then(|r| descriptor(&r)),
-        largest.and_then(|p| descriptor(p.exterior())),
+        layout.reference.shape.as_ref(),
     ) else {
         return 0.0;
     };
     let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let difference: Vec<f64> = cells.iter().zip(&regions).map(|(a, b)| a - b).collect();
-    let total = norm(&cells) + norm(&regions);
+    let difference: Vec<f64> = cells.iter().zip(regions).map(|(a, b)| a - b).collect();
+    let total = norm(&cells) + norm(regions);
     if total > 0.0 {
         1.0 - norm(&difference) / total
     } else {
@@ -684,13 +699,7 @@ mod tests {
         let square: Polygon<f64> =
             polygon![(x: 0.0, y: 0.0), (x: 3.0, y: 0.0), (x: 3.0, y: 3.0), (x: 0.0, y: 3.0)];
         let outline = MultiPolygon(vec![square]);
-        Reference {
-            centroids,
-            adjacency,
-            landmasses: Landmasses::new(&outline, vec![0; 9]),
-            outline,
-            unit: 1.0,
-        }
+        Reference::of(centroids, adjacency, outline, vec![0; 9], 1.0)
     }
 
     /// Unit cells for (column, row) positions, centres in the block's frame.
@@ -878,13 +887,7 @@ mod tests {
             })
             .collect();
         let outline = MultiPolygon(vec![]);
-        let reference = Reference {
-            centroids: centres.clone(),
-            adjacency: vec![],
-            landmasses: Landmasses::new(&outline, vec![]),
-            outline,
-            unit: 2.0,
-        };
+        let reference = Reference::of(centres.clone(), vec![], outline, vec![], 2.0);
         let layout = Scored {
             reference: &reference,
             moved: &centres,
@@ -916,13 +919,13 @@ mod tests {
             .iter()
             .map(|&x| Coord { x, y: 0.5 })
             .collect();
-        let reference = Reference {
-            centroids: centroids.clone(),
-            adjacency: vec![],
-            landmasses: Landmasses::new(&outline, vec![0, 0, 0, 1, 1, 1]),
+        let reference = Reference::of(
+            centroids.clone(),
+            vec![],
             outline,
-            unit: 1.0,
-        };
+            vec![0, 0, 0, 1, 1, 1],
+            1.0,
+        );
         let mut cells: Vec<Position> = vec![(0, 0), (1, 0), (2, 0), (10, 0), (11, 0), (12, 0)];
         let centres = |cells: &[Position]| -> Vec<Coord<f64>> {
             cells

@@ -30,6 +30,7 @@ mod refine;
 mod score;
 mod snake;
 mod tiling;
+mod validity;
 
 use geo::{Coord, MultiPolygon, Polygon};
 use serde::Serialize;

@@ -2,13 +2,16 @@
 //! outline of the whole map (every part with its holes), cleaned and simplified so it keeps about
 //! two vertices per region.
 
-use super::geometry::{nearest_on_segment, point_segment_distance2, segments_intersect, RingIndex};
+use super::geometry::{
+    interior_point, nearest_on_segment, point_segment_distance2, segments_intersect, RingIndex,
+};
 use super::Params;
 use geo::orient::{Direction, Orient};
 use geo::{
-    Area, BoundingRect, Centroid, Contains, Coord, InteriorPoint, LineString, MultiPolygon, Point,
+    Area, BoundingRect, Centroid, Contains, Coord, Intersects, LineString, MultiPolygon, Point,
     Polygon, SimplifyVw, SimplifyVwPreserve,
 };
+use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, RTreeObject, AABB};
 
@@ -18,8 +21,14 @@ const TOUCH_TOLERANCE: f64 = 1e-6;
 /// Shared border length, in cells, above which two regions are adjacent rather than meeting at a
 /// point.
 const SHARED_LENGTH: f64 = 1e-4;
+/// Boundary segments per parallel task of the adjacency search.
+const ADJACENCY_CHUNK: usize = 4096;
 /// Holes smaller than this many cells² are slivers between regions, not lakes (§1).
 const SLIVER_AREA: f64 = 0.5;
+/// Triangle area, in cells², below which the outline's detail is dropped before anything else
+/// is done with it: a hundredth of a cell on both sides, the resolution the method needs
+/// (§1; dense boundaries bring vertices a ten-thousandth of a cell apart).
+const FINEST_DETAIL: f64 = 0.5e-4;
 /// A centroid outside the simplified outline is moved this far inside it, in cells (§1).
 const INSIDE_MARGIN: f64 = 0.05;
 
@@ -62,8 +71,9 @@ pub fn prepare(regions: &[&MultiPolygon<f64>], params: &Params) -> Prepared {
         .zip(&centroids)
         .map(|(r, &fallback)| r.centroid().map_or(fallback, |p| p.0))
         .collect();
-    let adjacency = adjacency(regions, params.point_adjacency);
-    let regions_union = merge(regions);
+    let clusters = clusters(regions);
+    let adjacency = adjacency(regions, &clusters, params.point_adjacency);
+    let regions_union = merge(regions, &clusters);
     let landmass_of = landmasses(regions, &regions_union, &centroids);
     let union = clean(regions_union.clone(), &centroids);
     // Small layers still keep a quadrilateral per ring on average.
@@ -116,18 +126,23 @@ fn parts_holding(rings: &[Ring], points: &[Coord<f64>]) -> Vec<usize> {
 
 /// For each region, the part of `union` that holds most of its area: each of a region's polygons
 /// lies in one part (a connected polygon lies in one connected part of the union), found from a
-/// point inside it (a region whose polygons all fail that test, by rounding, belongs to the part
-/// nearest its centroid).
+/// point inside it (a region whose polygons all fall outside every part's bounding box, by
+/// rounding, belongs to the part nearest its centroid). A part's segment index is built only
+/// when needed.
 fn landmasses(
     regions: &[&MultiPolygon<f64>],
     union: &MultiPolygon<f64>,
     centroids: &[Coord<f64>],
 ) -> Vec<usize> {
-    let parts: Vec<RingIndex> = union
-        .0
-        .iter()
-        .map(|p| RingIndex::new(&coords_of(&rings_of(&MultiPolygon(vec![p.clone()])))))
-        .collect();
+    let parts: Vec<std::sync::OnceLock<RingIndex>> =
+        union.0.iter().map(|_| Default::default()).collect();
+    let index = |k: usize| {
+        parts[k].get_or_init(|| {
+            RingIndex::new(&coords_of(&rings_of(&MultiPolygon(vec![
+                union.0[k].clone()
+            ]))))
+        })
+    };
     let boxes: RTree<GeomWithData<Rectangle<[f64; 2]>, usize>> = RTree::bulk_load(
         (union.0.iter().enumerate())
             .filter_map(|(k, p)| {
@@ -140,29 +155,39 @@ fn landmasses(
             })
             .collect(),
     );
+    // A point of a region lies in the union: when no smaller candidate holds it, the largest
+    // does, so that the mainland of a dense layer never needs its index.
+    let sizes: Vec<usize> = union.0.iter().map(|p| p.exterior().0.len()).collect();
     let part_of = |p: Coord<f64>| {
-        (boxes.locate_all_at_point(&[p.x, p.y]))
+        let mut holding: Vec<usize> = (boxes.locate_all_at_point(&[p.x, p.y]))
             .map(|b| b.data)
-            .filter(|&k| parts[k].contains(p))
-            .min()
+            .collect();
+        holding.sort_unstable_by_key(|&k| (sizes[k], k));
+        let largest = holding.pop()?;
+        Some(
+            holding
+                .into_iter()
+                .find(|&k| index(k).contains(p))
+                .unwrap_or(largest),
+        )
     };
     regions
         .iter()
         .zip(centroids)
         .map(|(region, &centroid)| {
-            let mut area = vec![0.0; parts.len()];
+            let mut area = vec![0.0; union.0.len()];
             for polygon in &region.0 {
-                if let Some(k) = polygon.interior_point().and_then(|p| part_of(p.0)) {
+                if let Some(k) = interior_point(polygon).and_then(part_of) {
                     area[k] += polygon.unsigned_area();
                 }
             }
-            let held = (0..parts.len())
+            let held = (0..area.len())
                 .filter(|&k| area[k] > 0.0)
                 .max_by(|&a, &b| area[a].total_cmp(&area[b]).then(b.cmp(&a)));
             held.unwrap_or_else(|| {
-                (0..parts.len())
+                (0..area.len())
                     .min_by(|&a, &b| {
-                        let d = |k: usize| parts[k].distance(centroid, |_| false);
+                        let d = |k: usize| index(k).distance(centroid, |_| false);
                         d(a).total_cmp(&d(b)).then(a.cmp(&b))
                     })
                     .unwrap_or(0)
@@ -184,9 +209,9 @@ fn centroid(region: &MultiPolygon<f64>) -> Coord<f64> {
         .iter()
         .max_by(|a, b| a.unsigned_area().total_cmp(&b.unsigned_area()));
     largest
-        .and_then(|p| p.interior_point())
-        .or_else(|| region.interior_point())
-        .map_or(Coord { x: 0.0, y: 0.0 }, |p: Point<f64>| p.0)
+        .and_then(interior_point)
+        .or_else(|| region.0.iter().find_map(interior_point))
+        .unwrap_or(Coord { x: 0.0, y: 0.0 })
 }
 
 /// A boundary segment of a region, for the adjacency search.
@@ -208,11 +233,16 @@ impl RTreeObject for Edge {
 /// `point_adjacency`, any point). Works on the boundaries' segments so that it needs no exact
 /// noding: a segment counts as shared where another region's segment runs along it within
 /// `TOUCH_TOLERANCE`.
-fn adjacency(regions: &[&MultiPolygon<f64>], point_adjacency: bool) -> Vec<(usize, usize)> {
-    let edges: Vec<Edge> = regions
-        .iter()
-        .enumerate()
-        .flat_map(|(region, mp)| {
+fn adjacency(
+    regions: &[&MultiPolygon<f64>],
+    clusters: &[Vec<usize>],
+    point_adjacency: bool,
+) -> Vec<(usize, usize)> {
+    // A region alone in its cluster touches no other.
+    let edges: Vec<Edge> = (clusters.iter().filter(|c| c.len() > 1))
+        .flatten()
+        .flat_map(|&region| {
+            let mp = regions[region];
             mp.0.iter()
                 .flat_map(|p| std::iter::once(p.exterior()).chain(p.interiors()))
                 .flat_map(|ring| ring.lines())
@@ -223,25 +253,73 @@ fn adjacency(regions: &[&MultiPolygon<f64>], point_adjacency: bool) -> Vec<(usiz
                 })
         })
         .collect();
-    let tree = RTree::bulk_load(edges.clone());
     let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
-    for e in &edges {
-        let env = e.envelope();
-        let search = AABB::from_corners(
-            [
-                env.lower()[0] - TOUCH_TOLERANCE,
-                env.lower()[1] - TOUCH_TOLERANCE,
-            ],
-            [
-                env.upper()[0] + TOUCH_TOLERANCE,
-                env.upper()[1] + TOUCH_TOLERANCE,
-            ],
-        );
-        for f in tree.locate_in_envelope_intersecting(&search) {
-            if f.region <= e.region || !touches(e, f) {
+    // Borders two regions have vertex for vertex (a topologically built layer shares every
+    // inner border so) are shared along their whole length: found by sorting, not searching,
+    // which is what keeps millions of vertices fast. The rest is searched for borders that run
+    // along each other within the tolerance. With `point_adjacency` every edge is searched,
+    // since regions that meet at a corner share no edge.
+    let searched: Vec<Edge> = if point_adjacency {
+        edges
+    } else {
+        let key = |e: &Edge| {
+            let (p, q) = if (e.a.x, e.a.y) <= (e.b.x, e.b.y) {
+                (e.a, e.b)
+            } else {
+                (e.b, e.a)
+            };
+            // + 0.0 turns −0 into 0, which must match.
+            [p.x, p.y, q.x, q.y].map(|v| (v + 0.0).to_bits())
+        };
+        let mut keyed: Vec<([u64; 4], usize, usize)> = (edges.par_iter().enumerate())
+            .map(|(k, e)| (key(e), e.region, k))
+            .collect();
+        keyed.par_sort_unstable();
+        let mut rest = Vec::new();
+        for group in keyed.chunk_by(|a, b| a.0 == b.0) {
+            let mut owners: Vec<usize> = group.iter().map(|g| g.1).collect();
+            owners.dedup();
+            if owners.len() == 1 {
+                rest.extend(group.iter().map(|g| edges[g.2]));
                 continue;
             }
-            *shared.entry((e.region, f.region)).or_default() += overlap(e, f);
+            let e = &edges[group[0].2];
+            let length = (e.b - e.a).x.hypot((e.b - e.a).y);
+            for (k, &i) in owners.iter().enumerate() {
+                for &j in &owners[k + 1..] {
+                    *shared.entry((i, j)).or_default() += length;
+                }
+            }
+        }
+        rest
+    };
+    let tree = RTree::bulk_load(searched.clone());
+    // In parallel over fixed chunks of edges, summed chunk by chunk in order: the same sums
+    // (to the last bit) with any number of threads.
+    let per_chunk: Vec<std::collections::BTreeMap<(usize, usize), f64>> = searched
+        .par_chunks(ADJACENCY_CHUNK)
+        .map(|chunk| {
+            let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
+            for e in chunk {
+                let env = e.envelope();
+                let t = TOUCH_TOLERANCE;
+                let search = AABB::from_corners(
+                    [env.lower()[0] - t, env.lower()[1] - t],
+                    [env.upper()[0] + t, env.upper()[1] + t],
+                );
+                for f in tree.locate_in_envelope_intersecting(&search) {
+                    if f.region <= e.region || !touches(e, f) {
+                        continue;
+                    }
+                    *shared.entry((e.region, f.region)).or_default() += overlap(e, f);
+                }
+            }
+            shared
+        })
+        .collect();
+    for chunk in per_chunk {
+        for (pair, length) in chunk {
+            *shared.entry(pair).or_default() += length;
         }
     }
     shared
@@ -281,16 +359,70 @@ fn overlap(e: &Edge, f: &Edge) -> f64 {
     (s.max(t).min(len) - s.min(t).max(0.0)).max(0.0)
 }
 
-/// The union of all regions. geo's union reads the winding of the first ring as the rule for all,
-/// and layers in the wild mix windings (Shapefile rings run clockwise), so orient every polygon
-/// first.
-fn merge(regions: &[&MultiPolygon<f64>]) -> MultiPolygon<f64> {
-    let oriented: Vec<Polygon<f64>> = regions
+/// Groups of regions whose bounding boxes (widened by `TOUCH_TOLERANCE`) overlap, directly or
+/// through others: only regions of one group can touch. Each group lists its regions in
+/// order, and the groups come in the order of their first regions.
+fn clusters(regions: &[&MultiPolygon<f64>]) -> Vec<Vec<usize>> {
+    let boxes: Vec<Option<AABB<[f64; 2]>>> = regions
         .iter()
-        .flat_map(|r| r.0.iter())
-        .map(|p| p.orient(Direction::Default))
+        .map(|r| {
+            let b = r.bounding_rect()?;
+            let t = TOUCH_TOLERANCE;
+            Some(AABB::from_corners(
+                [b.min().x - t, b.min().y - t],
+                [b.max().x + t, b.max().y + t],
+            ))
+        })
         .collect();
-    geo::unary_union(&oriented)
+    let tree: RTree<GeomWithData<Rectangle<[f64; 2]>, usize>> = RTree::bulk_load(
+        (boxes.iter().enumerate())
+            .filter_map(|(k, b)| Some(GeomWithData::new(Rectangle::from_aabb((*b)?), k)))
+            .collect(),
+    );
+    // Union–find over the overlapping pairs, each group rooted at its smallest region.
+    let mut root: Vec<usize> = (0..regions.len()).collect();
+    fn find(root: &mut [usize], mut k: usize) -> usize {
+        while root[k] != k {
+            root[k] = root[root[k]];
+            k = root[k];
+        }
+        k
+    }
+    for (k, b) in boxes.iter().enumerate() {
+        let Some(b) = b else { continue };
+        for other in tree.locate_in_envelope_intersecting(b) {
+            let (a, c) = (find(&mut root, k), find(&mut root, other.data));
+            root[a.max(c)] = a.min(c);
+        }
+    }
+    let mut groups: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+    for k in 0..regions.len() {
+        let r = find(&mut root, k);
+        groups.entry(r).or_default().push(k);
+    }
+    groups.into_values().collect()
+}
+
+/// The union of all regions, group by group (in parallel): a region alone in its group is its
+/// own part of the union, validated already, so the polygon overlay (which slows down badly on
+/// some dense shapes) runs only where regions meet. geo's union reads the winding of the first
+/// ring as the rule for all, and layers in the wild mix windings (Shapefile rings run
+/// clockwise), so every polygon is oriented first.
+fn merge(regions: &[&MultiPolygon<f64>], clusters: &[Vec<usize>]) -> MultiPolygon<f64> {
+    let parts: Vec<Vec<Polygon<f64>>> = clusters
+        .par_iter()
+        .map(|group| {
+            let oriented: Vec<Polygon<f64>> = (group.iter())
+                .flat_map(|&k| regions[k].0.iter())
+                .map(|p| p.orient(Direction::Default))
+                .collect();
+            match group.len() {
+                1 => oriented,
+                _ => geo::unary_union(&oriented).0,
+            }
+        })
+        .collect();
+    MultiPolygon(parts.into_iter().flatten().collect())
 }
 
 /// Drops parts that hold no centroid (stray islands of multipart regions) and fills holes that
@@ -300,8 +432,13 @@ fn clean(union: MultiPolygon<f64>, centroids: &[Coord<f64>]) -> MultiPolygon<f64
         .0
         .into_iter()
         .filter(|part| {
+            let Some(bounds) = part.bounding_rect() else {
+                return false;
+            };
             let shell = Polygon::new(part.exterior().clone(), vec![]);
-            centroids.iter().any(|&c| shell.contains(&Point(c)))
+            (centroids.iter())
+                .filter(|c| bounds.intersects(&Point(**c)))
+                .any(|&c| shell.contains(&Point(c)))
         })
         .map(|part| {
             let (exterior, holes) = part.into_inner();
@@ -322,16 +459,29 @@ fn vertex_count(p: &MultiPolygon<f64>) -> usize {
 }
 
 /// Topology-preserving Visvalingam simplification to about `target` vertices (§1), or with the
-/// tolerance the user gave. The tolerance is found by bisection with plain Visvalingam, ten times
-/// faster than the topology-preserving variant and close enough for "about", which then runs
-/// once. geo preserves topology within each part only, so a result whose rings cross each other
-/// is refused and the tolerance lowered.
+/// tolerance the user gave. Detail finer than [`FINEST_DETAIL`] goes first, in one pass, so that
+/// dense boundaries cost one pass over their vertices. The tolerance is then found by bisection
+/// with plain Visvalingam, ten times faster than the topology-preserving variant and close
+/// enough for "about", which then runs once. geo preserves topology within each part only, so
+/// a result whose rings cross each other is refused and the tolerance lowered.
 fn simplify(union: &MultiPolygon<f64>, target: usize, tolerance: Option<f64>) -> MultiPolygon<f64> {
+    if tolerance.is_none() && vertex_count(union) <= target {
+        return union.clone();
+    }
+    let coarse = |p: &MultiPolygon<f64>| RingIndex::new(&coords_of(&rings_of(p))).self_intersects();
+    // Vertices within a tenth of the finest detail of the last one kept go first, in linear
+    // time, then plain Visvalingam, which needs no segment index; the topology-preserving
+    // variant only if that made rings cross.
+    let finest = FINEST_DETAIL.min(tolerance.unwrap_or(f64::INFINITY));
+    let fine = Some(thin(union, 0.1 * finest.sqrt()).simplify_vw(finest))
+        .filter(|p| !coarse(p))
+        .or_else(|| Some(union.simplify_vw_preserve(finest)).filter(|p| !coarse(p)));
+    let fine = fine.as_ref().unwrap_or(union);
     let eps = match tolerance {
         Some(eps) => eps,
-        None if vertex_count(union) <= target => return union.clone(),
+        None if vertex_count(fine) <= target => return fine.clone(),
         None => {
-            let too_many = |eps: f64| vertex_count(&union.simplify_vw(eps)) > target;
+            let too_many = |eps: f64| vertex_count(&fine.simplify_vw(eps)) > target;
             let (mut lo, mut hi) = (1e-9, 1e-3);
             while too_many(hi) && hi < 1e9 {
                 lo = hi;
@@ -350,13 +500,48 @@ fn simplify(union: &MultiPolygon<f64>, target: usize, tolerance: Option<f64>) ->
     };
     let mut eps = eps;
     while eps > 1e-12 {
-        let simplified = union.simplify_vw_preserve(eps);
-        if !RingIndex::new(&coords_of(&rings_of(&simplified))).self_intersects() {
+        let simplified = fine.simplify_vw_preserve(eps);
+        if !coarse(&simplified) {
             return simplified;
         }
         eps *= 0.5;
     }
-    union.clone()
+    fine.clone()
+}
+
+/// `union` without the vertices nearer than `spacing` to the last vertex kept before them (the
+/// radial-distance filter: linear time, and no point of a ring moves by more than `spacing`).
+/// A ring that would keep fewer than four vertices keeps all.
+fn thin(union: &MultiPolygon<f64>, spacing: f64) -> MultiPolygon<f64> {
+    let thin_ring = |ring: &LineString<f64>| {
+        let mut kept: Vec<Coord<f64>> = Vec::with_capacity(ring.0.len());
+        for &c in &ring.0 {
+            match kept.last() {
+                Some(&last) if (c - last).x.hypot((c - last).y) < spacing => {}
+                _ => kept.push(c),
+            }
+        }
+        // The ring stays closed on its own first vertex.
+        match (kept.first(), ring.0.last()) {
+            (Some(&first), Some(_)) if kept.len() >= 4 => {
+                if kept.last() != Some(&first) {
+                    kept.push(first);
+                }
+                LineString(kept)
+            }
+            _ => ring.clone(),
+        }
+    };
+    MultiPolygon(
+        (union.0.iter())
+            .map(|p| {
+                Polygon::new(
+                    thin_ring(p.exterior()),
+                    p.interiors().iter().map(thin_ring).collect(),
+                )
+            })
+            .collect(),
+    )
 }
 
 /// The rings of a multipolygon, open, with part numbers; exteriors counter-clockwise, holes
