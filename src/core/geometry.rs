@@ -4,7 +4,7 @@
 //! they work on plain coordinate rings rather than on geo polygons.
 
 use geo::kernels::{Kernel, Orientation, RobustKernel};
-use geo::{Coord, Polygon, Rect};
+use geo::{Coord, MultiPolygon, Polygon, Rect};
 use rstar::{PointDistance, RTree, RTreeObject, AABB};
 
 /// Closed rings given as open coordinate chains (the last vertex joins the first).
@@ -100,28 +100,41 @@ pub fn segments_intersect(p1: Coord<f64>, p2: Coord<f64>, q1: Coord<f64>, q2: Co
     on(q1, q2, p1, d1) || on(q1, q2, p2, d2) || on(p1, p2, q1, d3) || on(p1, p2, q2, d4)
 }
 
-/// A point inside `polygon` (its holes respected): the middle of the widest span of a
-/// horizontal line at mid-height, moved to pass through no vertex. O(n log n), where geo's
-/// `InteriorPoint` intersects every segment with every other (minutes on a densified square).
-/// `None` for a polygon without height.
+/// A point inside `polygon` (its holes respected): the middle of the widest span of the
+/// horizontal line at mid-height, moved halfway to the nearest other vertex level if a vertex
+/// lies on it — geo's `InteriorPoint` rule, in O(n log n) where geo intersects every segment
+/// with every other (minutes on a densified square). `None` for a polygon without height.
 pub fn interior_point(polygon: &Polygon<f64>) -> Option<Coord<f64>> {
+    widest_span(polygon).map(|(point, _)| point)
+}
+
+/// [`interior_point`] of the polygon whose span is the widest, as geo's rule for multipolygons.
+pub fn interior_point_of_all(polygons: &MultiPolygon<f64>) -> Option<Coord<f64>> {
+    (polygons.0.iter())
+        .filter_map(widest_span)
+        .fold(None, |best: Option<(Coord<f64>, f64)>, span| match best {
+            Some(b) if b.1 >= span.1 => Some(b),
+            _ => Some(span),
+        })
+        .map(|(point, _)| point)
+}
+
+/// The middle of the widest span of `polygon` on its interior-point line, and its width.
+fn widest_span(polygon: &Polygon<f64>) -> Option<(Coord<f64>, f64)> {
     let rings = || std::iter::once(polygon.exterior()).chain(polygon.interiors());
     let levels = || rings().flat_map(|r| r.0.iter().map(|c| c.y));
     let (low, high) = levels().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
         (lo.min(y), hi.max(y))
     });
-    // Halfway between the two vertex levels around the middle (found in one pass each).
-    let middle = (low + high) / 2.0;
-    let below = levels()
-        .filter(|&y| y <= middle)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let above = levels()
-        .filter(|&y| y > middle)
-        .fold(f64::INFINITY, f64::min);
-    if !(below.is_finite() && above.is_finite()) {
+    if low >= high || low.is_nan() || high.is_nan() {
         return None;
     }
-    let y = (below + above) / 2.0;
+    let mut y = (low + high) / 2.0;
+    if levels().any(|v| v == y) {
+        let nearest = (levels().filter(|&v| v != y))
+            .min_by(|a, b| (a - y).abs().total_cmp(&(b - y).abs()))?;
+        y = (y + nearest) / 2.0;
+    }
     let mut xs: Vec<f64> = rings()
         .flat_map(|r| r.lines())
         .filter(|l| (l.start.y > y) != (l.end.y > y))
@@ -129,10 +142,18 @@ pub fn interior_point(polygon: &Polygon<f64>) -> Option<Coord<f64>> {
         .collect();
     xs.sort_by(f64::total_cmp);
     xs.chunks_exact(2)
-        .max_by(|a, b| (a[1] - a[0]).total_cmp(&(b[1] - b[0])))
-        .map(|span| Coord {
-            x: (span[0] + span[1]) / 2.0,
-            y,
+        .map(|span| {
+            (
+                Coord {
+                    x: (span[0] + span[1]) / 2.0,
+                    y,
+                },
+                span[1] - span[0],
+            )
+        })
+        .fold(None, |best: Option<(Coord<f64>, f64)>, span| match best {
+            Some(b) if b.1 >= span.1 => Some(b),
+            _ => Some(span),
         })
 }
 

@@ -3,7 +3,8 @@
 //! two vertices per region.
 
 use super::geometry::{
-    interior_point, nearest_on_segment, point_segment_distance2, segments_intersect, RingIndex,
+    interior_point, interior_point_of_all, nearest_on_segment, point_segment_distance2,
+    segments_intersect, RingIndex,
 };
 use super::Params;
 use geo::orient::{Direction, Orient};
@@ -210,7 +211,7 @@ fn centroid(region: &MultiPolygon<f64>) -> Coord<f64> {
         .max_by(|a, b| a.unsigned_area().total_cmp(&b.unsigned_area()));
     largest
         .and_then(interior_point)
-        .or_else(|| region.0.iter().find_map(interior_point))
+        .or_else(|| interior_point_of_all(region))
         .unwrap_or(Coord { x: 0.0, y: 0.0 })
 }
 
@@ -403,9 +404,10 @@ fn clusters(regions: &[&MultiPolygon<f64>]) -> Vec<Vec<usize>> {
     groups.into_values().collect()
 }
 
-/// The union of all regions, group by group (in parallel): a region alone in its group is its
-/// own part of the union, validated already, so the polygon overlay (which slows down badly on
-/// some dense shapes) runs only where regions meet. geo's union reads the winding of the first
+/// The union of all regions, group by group (in parallel), since only regions of one group can
+/// meet. Parts come as the polygon overlay writes them, ordered by their lowest vertex (the
+/// overlay's order): the simplification keeps each ring's first vertex and later steps number
+/// the parts, so both follow from the geometry alone. geo's union reads the winding of the first
 /// ring as the rule for all, and layers in the wild mix windings (Shapefile rings run
 /// clockwise), so every polygon is oriented first.
 fn merge(regions: &[&MultiPolygon<f64>], clusters: &[Vec<usize>]) -> MultiPolygon<f64> {
@@ -416,13 +418,29 @@ fn merge(regions: &[&MultiPolygon<f64>], clusters: &[Vec<usize>]) -> MultiPolygo
                 .flat_map(|&k| regions[k].0.iter())
                 .map(|p| p.orient(Direction::Default))
                 .collect();
-            match group.len() {
-                1 => oriented,
-                _ => geo::unary_union(&oriented).0,
-            }
+            geo::unary_union(&oriented).0
         })
         .collect();
-    MultiPolygon(parts.into_iter().flatten().collect())
+    let lowest = |p: &Polygon<f64>| {
+        (p.exterior().0.iter()).fold(
+            Coord {
+                x: f64::INFINITY,
+                y: f64::INFINITY,
+            },
+            |a, &c| {
+                if (c.x, c.y) < (a.x, a.y) {
+                    c
+                } else {
+                    a
+                }
+            },
+        )
+    };
+    let mut parts: Vec<(Coord<f64>, Polygon<f64>)> = (parts.into_iter().flatten())
+        .map(|p| (lowest(&p), p))
+        .collect();
+    parts.sort_by(|(p, _), (q, _)| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
+    MultiPolygon(parts.into_iter().map(|(_, p)| p).collect())
 }
 
 /// Drops parts that hold no centroid (stray islands of multipart regions) and fills holes that
