@@ -110,13 +110,15 @@ pub fn interior_point(polygon: &Polygon<f64>) -> Option<Coord<f64>> {
 
 /// [`interior_point`] of the polygon whose span is the widest, as geo's rule for multipolygons.
 pub fn interior_point_of_all(polygons: &MultiPolygon<f64>) -> Option<Coord<f64>> {
-    (polygons.0.iter())
-        .filter_map(widest_span)
-        .fold(None, |best: Option<(Coord<f64>, f64)>, span| match best {
-            Some(b) if b.1 >= span.1 => Some(b),
-            _ => Some(span),
-        })
-        .map(|(point, _)| point)
+    widest(polygons.0.iter().filter_map(widest_span)).map(|(point, _)| point)
+}
+
+/// The widest of `spans` (a point and a width), the first among equals.
+fn widest(spans: impl Iterator<Item = (Coord<f64>, f64)>) -> Option<(Coord<f64>, f64)> {
+    spans.fold(None, |best, span| match best {
+        Some(b) if b.1 >= span.1 => Some(b),
+        _ => Some(span),
+    })
 }
 
 /// The middle of the widest span of `polygon` on its interior-point line, and its width.
@@ -141,20 +143,13 @@ fn widest_span(polygon: &Polygon<f64>) -> Option<(Coord<f64>, f64)> {
         .map(|l| l.start.x + (y - l.start.y) * (l.end.x - l.start.x) / (l.end.y - l.start.y))
         .collect();
     xs.sort_by(f64::total_cmp);
-    xs.chunks_exact(2)
-        .map(|span| {
-            (
-                Coord {
-                    x: (span[0] + span[1]) / 2.0,
-                    y,
-                },
-                span[1] - span[0],
-            )
-        })
-        .fold(None, |best: Option<(Coord<f64>, f64)>, span| match best {
-            Some(b) if b.1 >= span.1 => Some(b),
-            _ => Some(span),
-        })
+    widest(xs.chunks_exact(2).map(|span| {
+        let middle = Coord {
+            x: (span[0] + span[1]) / 2.0,
+            y,
+        };
+        (middle, span[1] - span[0])
+    }))
 }
 
 /// Whether the ray from `p` towards +x crosses `s`; half-open in y, so that a ray through a
@@ -286,6 +281,9 @@ mod tests {
         for polygon in cases {
             let p = interior_point(&polygon).expect("a point");
             assert!(polygon.contains(&Point(p)), "{p:?} outside {polygon:?}");
+            // The rule is geo's, so the point is too.
+            let geo_point = geo::InteriorPoint::interior_point(&polygon).map(|q| q.0);
+            assert_eq!(Some(p), geo_point, "{polygon:?}");
         }
         assert_eq!(
             interior_point(&wkt!(POLYGON((0. 0.,1. 0.,2. 0.,0. 0.)))),
