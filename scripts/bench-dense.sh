@@ -25,6 +25,8 @@ cli="$root/target/release/snakegrid"
 [ -x "$cli" ] || cargo build --manifest-path "$root/Cargo.toml" --release --bin snakegrid
 make_layer="$root/scripts/make-test-layers.py"
 mkdir -p "$dense"
+# shellcheck source=scripts/timed-runs.sh
+source "$root/scripts/timed-runs.sh"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 
@@ -50,24 +52,12 @@ for name in ${layers//,/ }; do
     vertices="$(python3 -c 'import sys, pyogrio.raw, shapely
 wkb = pyogrio.raw.read(sys.argv[1], read_geometry=True, columns=[])[2]
 print(int(shapely.get_num_coordinates(shapely.from_wkb(wkb)).sum()))' "$file")"
-    times=()
-    memory=0
-    runs=0
-    while [ "$runs" -lt 5 ]; do
-        /usr/bin/time -f "%e %M" -o "$work/time" "$cli" -q -overwrite "$@" "$work/out.gpkg" "$file"
-        read -r seconds kb < "$work/time"
-        times+=("$seconds")
-        [ "$kb" -gt "$memory" ] && memory=$kb
-        runs=$((runs + 1))
-        awk -v s="$seconds" 'BEGIN { exit !(s >= 60) }' && break
-    done
-    median="$(printf '%s\n' "${times[@]}" | sort -g | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')"
+    timed_runs "$work" "$cli" -q -overwrite "$@" "$work/out.gpkg" "$file"
     growth="–"
     # Successive sizes of one layer (us_states_1e5 → us_states_1e6) give the exponent.
     if [ -n "$previous" ] && [ "${previous%% *}" = "${name%_*}" ]; then
         read -r _ pv pt <<< "$previous"
-        growth="$(awk -v v="$vertices" -v t="$median" -v pv="$pv" -v pt="$pt" \
-            'BEGIN { printf "%.2f", log(t / pt) / log(v / pv) }')"
+        growth="$(growth_exponent "$vertices" "$median" "$pv" "$pt")"
     fi
     printf '| %s | %s | %s | %s | %s | %s |\n' "$name" "$vertices" "$runs" "$median" "$((memory / 1024))" "$growth"
     previous="${name%_*} $vertices $median"

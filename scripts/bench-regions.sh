@@ -15,6 +15,8 @@ sizes="${1:-1000,3000,10000,33000,100000}"
 shift || true
 cli="$root/target/release/snakegrid"
 [ -x "$cli" ] || cargo build --manifest-path "$root/Cargo.toml" --release --bin snakegrid
+# shellcheck source=scripts/timed-runs.sh
+source "$root/scripts/timed-runs.sh"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 
@@ -26,22 +28,10 @@ previous=""
 for n in ${sizes//,/ }; do
     layer="$work/voronoi_$n.gpkg"
     python3 "$root/scripts/make-test-layers.py" voronoi "$n" 1 "$layer"
-    times=()
-    memory=0
-    runs=0
-    while [ "$runs" -lt 5 ]; do
-        /usr/bin/time -f "%e %M" -o "$work/time" "$cli" -q -overwrite "$@" "$work/out.gpkg" "$layer"
-        read -r seconds kb < "$work/time"
-        times+=("$seconds")
-        [ "$kb" -gt "$memory" ] && memory=$kb
-        runs=$((runs + 1))
-        awk -v s="$seconds" 'BEGIN { exit !(s >= 60) }' && break
-    done
-    median="$(printf '%s\n' "${times[@]}" | sort -g | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')"
+    timed_runs "$work" "$cli" -q -overwrite "$@" "$work/out.gpkg" "$layer"
     growth="–"
     if [ -n "$previous" ]; then
-        growth="$(awk -v n="$n" -v t="$median" -v pn="${previous% *}" -v pt="${previous#* }" \
-            'BEGIN { printf "%.2f", log(t / pt) / log(n / pn) }')"
+        growth="$(growth_exponent "$n" "$median" "${previous% *}" "${previous#* }")"
     fi
     printf '| %s | %s | %s | %s | %s |\n' "$n" "$runs" "$median" "$((memory / 1024))" "$growth"
     previous="$n $median"
