@@ -42,8 +42,7 @@ layer_file() {
     echo "$file"
 }
 
-echo "snakegrid $(git -C "$root" describe --always --dirty), $(date -u +%F), load $(cut -d' ' -f1-3 /proc/loadavg), options: ${*:-defaults}"
-echo
+bench_header "$root" "$@"
 echo "| layer | vertices | runs | median wall (s) | peak memory (MB) | growth k (time ∝ vertices^k) |"
 echo "|---|---:|---:|---:|---:|---:|"
 previous=""

@@ -20,8 +20,7 @@ source "$root/scripts/timed-runs.sh"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 
-echo "snakegrid $(git -C "$root" describe --always --dirty), $(date -u +%F), load $(cut -d' ' -f1-3 /proc/loadavg), options: ${*:-defaults}"
-echo
+bench_header "$root" "$@"
 echo "| regions | runs | median wall (s) | peak memory (MB) | growth k (time ∝ n^k) |"
 echo "|---:|---:|---:|---:|---:|"
 previous=""

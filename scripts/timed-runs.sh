@@ -2,7 +2,8 @@
 # (once more while a run takes under a minute) and sets `runs`, `median` (wall seconds, the
 # median run) and `memory` (the largest peak resident size, KB), measured by GNU time
 # (/usr/bin/time). `growth_exponent SIZE TIME PREVIOUS_SIZE PREVIOUS_TIME` prints k of
-# time ∝ size^k between two measurements.
+# time ∝ size^k between two measurements. `bench_header ROOT OPTIONS...` prints the line that
+# says which build, day, load and options a table comes from.
 
 timed_runs() {
     local work=$1 seconds kb times=()
@@ -22,4 +23,11 @@ timed_runs() {
 
 growth_exponent() {
     awk -v n="$1" -v t="$2" -v pn="$3" -v pt="$4" 'BEGIN { printf "%.2f", log(t / pt) / log(n / pn) }'
+}
+
+bench_header() {
+    local root=$1
+    shift
+    echo "snakegrid $(git -C "$root" describe --always --dirty), $(date -u +%F), load $(cut -d' ' -f1-3 /proc/loadavg), options: ${*:-defaults}"
+    echo
 }

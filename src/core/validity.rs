@@ -119,9 +119,14 @@ impl<'r> Runs<'r> {
         for (ring, coords) in rings.iter().enumerate() {
             for start in (0..coords.len()).step_by(RUN) {
                 let end = (start + RUN).min(coords.len());
-                let points = (start..=end).map(|i| coords[i % coords.len()]);
-                let envelope =
-                    AABB::from_points(points.map(|c| [c.x, c.y]).collect::<Vec<_>>().iter());
+                let first = coords[start];
+                let envelope = ((start + 1)..=end).map(|i| coords[i % coords.len()]).fold(
+                    AABB::from_point([first.x, first.y]),
+                    |mut b, c| {
+                        b.merge(&AABB::from_point([c.x, c.y]));
+                        b
+                    },
+                );
                 runs.push(Run {
                     ring,
                     start,
