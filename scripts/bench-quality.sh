@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Quality of the layouts, measured by the shared judge (../shared/eval/gridmap_eval.py, the
 # reference implementation of method.md §8), on every shared layer and on generated ones (random
-# Voronoi layers, islands, a river-like gap; scripts/make-test-layers.py), through the command
+# Voronoi layers, islands, a river-like gap, an archipelago; scripts/make-test-layers.py), through the command
 # line with the defaults and with -refine false; writes QUALITY.md with every metric in one
 # table and the reference figures of other tools beside them. Re-run it before any stop that
 # touches the core.
@@ -25,10 +25,12 @@ make voronoi 300 1 "$work/voronoi_300.gpkg"
 make voronoi 3000 2 "$work/voronoi_3000.gpkg"
 make islands 3 "$work/islands.gpkg"
 make river 300 4 "$work/river.gpkg"
+make archipelago 3000 300 5 "$work/archipelago.gpkg"
 layers=(
     "$data/us_states.gpkg" "$data/nc_counties.gpkg" "$data/virginia_counties.gpkg"
     "$data/world_countries.gpkg" "$data/us_counties.gpkg"
     "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
+    "$work/archipelago.gpkg"
 )
 
 rows="$work/rows.tsv"
@@ -67,8 +69,9 @@ done
     echo "load $(cut -d' ' -f1-3 /proc/loadavg). *default* is the command line's defaults; *plain* is"
     echo "\`-refine false\` (the paper's method with our landmass budgets). The generated layers come"
     echo "from \`scripts/make-test-layers.py\`: random Voronoi cells of 300 and 3,000 regions, three"
-    echo "far-apart landmasses with islands (\`islands\`), and Voronoi cells cut by a winding river"
-    echo "gap (\`river\`)."
+    echo "far-apart landmasses with islands (\`islands\`), Voronoi cells cut by a winding river gap"
+    echo "(\`river\`), and a mainland of 3,000 Voronoi cells ringed by 300 one-region islands"
+    echo "(\`archipelago\`)."
     echo
     echo "Columns: C_adjacent in the 8-neighbourhood and the 4-neighbourhood (shared edge), the"
     echo "false-neighbour share, C_orientation (degrees) and the misdirected share (> 45°),"

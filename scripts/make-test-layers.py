@@ -5,6 +5,9 @@
                                                     administrative regions), N regions
     make-test-layers.py islands SEED OUT.gpkg       three far-apart landmasses of Voronoi cells,
                                                     each with a few islands off its coast
+    make-test-layers.py archipelago N ISLANDS SEED OUT.gpkg
+                                                    a mainland of N Voronoi cells and ISLANDS
+                                                    one-region islands scattered round it
     make-test-layers.py river N SEED OUT.gpkg       Voronoi cells cut by a river-like gap, the
                                                     outline's two banks close together
     make-test-layers.py densify SRC VERTICES OUT.gpkg
@@ -107,6 +110,27 @@ def islands(seed):
     return ids, geometries
 
 
+def archipelago(n, count, seed):
+    """A mainland of n Voronoi cells in the middle of the square and `count` small round
+    islands of one region each, scattered over the rest of it (an island nation's districts)."""
+    rng = np.random.default_rng(seed)
+    land = shapely.Point(SIDE / 2, SIDE / 2).buffer(SIDE * 0.3, quad_segs=32)
+    ids, geometries = [], []
+    for k, cell in enumerate(voronoi_tiles(random_points(rng, n, land), land)):
+        ids.append(f"m{k}")
+        geometries.append(cell)
+    radius = SIDE * 0.3 / math.sqrt(n) / 2  # half a mainland region's size
+    placed = [land.buffer(2 * radius)]
+    while len(ids) < n + count:
+        p = shapely.Point(rng.uniform(0, SIDE), rng.uniform(0, SIDE))
+        island = p.buffer(radius, quad_segs=8)
+        if not any(g.intersects(island.buffer(radius)) for g in placed):
+            placed.append(island)
+            ids.append(f"i{len(ids) - n}")
+            geometries.append(island)
+    return ids, geometries
+
+
 def river(n, seed):
     """Voronoi cells with a winding gap through the middle (a river of a fiftieth of the side)."""
     rng = np.random.default_rng(seed)
@@ -200,6 +224,9 @@ def main(argv):
     elif kind == "islands":
         ids, geometries = islands(int(args[0]))
         write(args[1], ids, geometries)
+    elif kind == "archipelago":
+        ids, geometries = archipelago(int(args[0]), int(args[1]), int(args[2]))
+        write(args[3], ids, geometries)
     elif kind == "river":
         ids, geometries = river(int(args[0]), int(args[1]))
         write(args[2], ids, geometries)

@@ -854,6 +854,14 @@ fn a_world_layer_in_longitude_and_latitude_is_laid_out_in_equal_earth() {
     assert_success(&output);
     let summary = stdout(&output);
     assert!(summary.contains("projected to Equal Earth"), "{summary}");
+    // Issue 13's guarantees hold in lon/lat too: every country on its own landmass, location
+    // within 1.5 cells.
+    assert!(summary.contains("wrong landmass 0.000"), "{summary}");
+    let location: f64 = (summary.split("C_location ").nth(1))
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|number| number.parse().ok())
+        .unwrap_or_else(|| panic!("no C_location in {summary}"));
+    assert!(location <= 1.5, "{summary}");
     let (_, rows) = read_rows(&dst);
     assert_eq!(assert_grid(&rows, "id").len(), 177);
     let written = Dataset::open(&dst).unwrap();

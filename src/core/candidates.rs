@@ -196,9 +196,9 @@ fn generate_here(
         &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
         params.topsis_weights,
     );
-    // The layout's defects first (method.md §8 and the cartographer's priorities: one piece, no
-    // holes), then TOPSIS over location, adjacency, orientation and shape.
-    let defects = |k: usize| layouts[k].metrics.pieces + layouts[k].metrics.holes;
+    // The layout's defects first (method.md §8 and the cartographer's priorities: each landmass
+    // in one piece, no holes), then TOPSIS over location, adjacency, orientation and shape.
+    let defects = |k: usize| layouts[k].breaks + layouts[k].metrics.holes as usize;
     let mut ranking: Vec<usize> = (0..layouts.len()).collect();
     ranking.sort_by(|&a, &b| {
         (defects(a).cmp(&defects(b)))
@@ -547,6 +547,8 @@ struct Layout {
     metrics: LayoutMetrics,
     region_metrics: Vec<RegionMetrics>,
     moved_outline: MultiPolygon<f64>,
+    /// How many times its landmasses' blocks break ([`metrics::landmass_breaks`]).
+    breaks: usize,
 }
 
 /// What every candidate shares.
@@ -614,40 +616,66 @@ impl Context<'_> {
                 cells[region] = own[choice];
             }
         }
+        let area = &self.prepared.area_centroids;
+        let misplaced = |region: usize, p: Coord<f64>| self.home.misplaced(region, p);
+        let homes = landmass::Homes {
+            places: area,
+            adjacency: &self.prepared.adjacency,
+            misplaced: self.home.any_counted().then_some(&misplaced),
+        };
+        landmass::settle(&mut lattice, &cells, &homes, self.params);
         if self.params.refine {
-            // Where §8 will measure each region from: its area centroid, taken into the
-            // lattice's frame by the scale-and-shift fit of the assigned layout.
-            let area = &self.prepared.area_centroids;
-            let assigned: Vec<Coord<f64>> = (cells.iter())
-                .map(|&k| lattice.centre(lattice.cells[k].col, lattice.cells[k].row))
-                .collect();
-            let (scale, offset) = metrics::fit(&assigned, area);
-            let targets: Vec<Coord<f64>> = area.iter().map(|&c| (c - offset) / scale).collect();
-            let misplaced = |region: usize, (col, row): (i32, i32)| {
-                self.home
-                    .misplaced(region, lattice.centre(col, row) * scale + offset)
-            };
-            let layout = refine::Layout {
-                adjacency: &self.prepared.adjacency,
-                centroids: area,
-                targets: &targets,
-                lattice: &lattice,
-                part_of,
-                misplaced: self.home.any_counted().then_some(&misplaced),
-            };
-            cells = refine::refine(&layout, &cells, self.params, seed, &|done| {
-                report(Stage::Refining, done)
-            })
-            .ok_or(Error::Cancelled)?;
+            cells = self.refine(&lattice, &cells, seed, report)?;
         }
         let (metrics, region_metrics) = self.evaluate(&lattice, &cells, moved);
+        let (positions, landmasses): (Vec<(i32, i32)>, Vec<usize>) = (cells.iter())
+            .map(|&k| {
+                let cell = lattice.cells[k];
+                ((cell.col, cell.row), cell.part)
+            })
+            .unzip();
         Ok(Layout {
+            breaks: metrics::landmass_breaks(&positions, &landmasses),
             lattice,
             cells,
             metrics,
             region_metrics,
             moved_outline,
         })
+    }
+
+    /// The refinement (§6b) of `cells` on `lattice`, towards where §8 will measure each region
+    /// from: its area centroid, taken into the lattice's frame by the scale-and-shift fit of
+    /// `cells`.
+    fn refine(
+        &self,
+        lattice: &Lattice,
+        cells: &[usize],
+        seed: u64,
+        report: &dyn Fn(Stage, f64) -> bool,
+    ) -> Result<Vec<usize>, Error> {
+        let area = &self.prepared.area_centroids;
+        let assigned: Vec<Coord<f64>> = (cells.iter())
+            .map(|&k| lattice.centre(lattice.cells[k].col, lattice.cells[k].row))
+            .collect();
+        let (scale, offset) = metrics::fit(&assigned, area);
+        let targets: Vec<Coord<f64>> = area.iter().map(|&c| (c - offset) / scale).collect();
+        let misplaced = |region: usize, (col, row): (i32, i32)| {
+            self.home
+                .misplaced(region, lattice.centre(col, row) * scale + offset)
+        };
+        let layout = refine::Layout {
+            adjacency: &self.prepared.adjacency,
+            centroids: area,
+            targets: &targets,
+            lattice,
+            part_of: &self.prepared.part_of,
+            misplaced: self.home.any_counted().then_some(&misplaced),
+        };
+        refine::refine(&layout, cells, self.params, seed, &|done| {
+            report(Stage::Refining, done)
+        })
+        .ok_or(Error::Cancelled)
     }
 
     /// The §8 metrics, in map units.

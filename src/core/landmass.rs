@@ -8,11 +8,21 @@
 //! (a small landmass of many regions, a tiny island) then takes the free positions nearest to its
 //! outline. The same rule, with `ratio`·k cells per part, gives the refinement its pool of free
 //! cells, each tagged with its part: a region only ever moves within its own landmass.
+//!
+//! Once assigned, each part's block of cells is moved as a whole to where §8 measures its
+//! regions from ([`settle`]): the Snake deforms the oceans between landmasses, so a block laid on
+//! its moved part can sit cells away from its own landmass once the layout is fitted back onto
+//! the map (Borneo's countries beside Indochina, Australia in the Indian Ocean).
 
 use super::geometry::RingIndex;
 use super::grid::{best_first, Lattice, LatticeCell};
+use super::metrics::LayoutShape;
 use super::outline::{coords_of, rings_of};
+use super::refine::PairWeights;
+use super::tiling::Position;
+use super::Params;
 use geo::{BoundingRect, Coord, MultiPolygon};
+use rustc_hash::{FxHashMap, FxHashSet};
 use std::collections::HashSet;
 
 /// The cells the layout may use, tagged with their part: the first `demands.iter().sum()` are
@@ -71,20 +81,16 @@ fn pick(
             chosen.push(*cell);
         }
     }
-    let indexes: Vec<RingIndex> = parts
-        .iter()
-        .map(|p| RingIndex::new(&coords_of(&rings_of(p))))
-        .collect();
+    if missing.iter().all(|&short| short == 0) {
+        return chosen;
+    }
+    let outlines = Outlines::new(parts);
     for (part, &short) in missing.iter().enumerate() {
         if short > 0 {
-            let others: Vec<&RingIndex> = (indexes.iter().enumerate())
-                .filter(|&(q, _)| q != part)
-                .map(|(_, index)| index)
-                .collect();
             chosen.extend(nearest_free(
                 lattice,
-                (&parts[part], &indexes[part]),
-                &others,
+                &parts[part],
+                &outlines,
                 part,
                 short,
                 taken,
@@ -94,12 +100,41 @@ fn pick(
     chosen
 }
 
-/// Distance from `p` to the outline `index` describes (0 inside it).
-fn distance_to(index: &RingIndex, p: Coord<f64>) -> f64 {
-    if index.contains(p) {
-        0.0
-    } else {
-        index.distance(p, |_| false)
+/// The parts' outlines, each indexed for distances and all in one index, so that whether a
+/// point lies nearer another part than its own takes one query, not one per part (a layer of
+/// hundreds of islands asks it for every position around each).
+struct Outlines {
+    own: Vec<RingIndex>,
+    all: RingIndex,
+    /// Per ring of `all`, its part.
+    part_of_ring: Vec<usize>,
+}
+
+impl Outlines {
+    fn new(parts: &[MultiPolygon<f64>]) -> Outlines {
+        let rings: Vec<Vec<Vec<Coord<f64>>>> =
+            parts.iter().map(|p| coords_of(&rings_of(p))).collect();
+        Outlines {
+            own: rings.iter().map(|r| RingIndex::new(r)).collect(),
+            all: RingIndex::new(&rings.concat()),
+            part_of_ring: (rings.iter().enumerate())
+                .flat_map(|(part, r)| std::iter::repeat_n(part, r.len()))
+                .collect(),
+        }
+    }
+
+    /// Distance from `p` to part `part`'s outline (0 inside it), and whether another part lies
+    /// nearer (or holds `p`).
+    fn distance(&self, part: usize, p: Coord<f64>) -> (f64, bool) {
+        if self.own[part].contains(p) {
+            return (0.0, false);
+        }
+        let own = self.own[part].distance(p, |_| false);
+        let elsewhere = self.all.contains(p)
+            || (self.all.nearest(p)).is_some_and(|s| {
+                self.part_of_ring[s.ring] != part && self.all.distance(p, |_| false) < own
+            });
+        (own, elsewhere)
     }
 }
 
@@ -110,8 +145,8 @@ fn distance_to(index: &RingIndex, p: Coord<f64>) -> f64 {
 /// outline's bounding box, so the work follows the positions handed out.
 fn nearest_free(
     lattice: &Lattice,
-    (outline, index): (&MultiPolygon<f64>, &RingIndex),
-    others: &[&RingIndex],
+    outline: &MultiPolygon<f64>,
+    outlines: &Outlines,
     part: usize,
     count: usize,
     taken: &mut HashSet<(i32, i32)>,
@@ -137,14 +172,14 @@ fn nearest_free(
     );
     // Wide enough to hold `count` free positions beyond the box even if none inside is free.
     let mut margin = (count as f64).sqrt().ceil() as i32 + 1;
+    // The first margin whose square settled `count` positions, own side or not.
+    let mut enough_at: Option<i32> = None;
     loop {
         let mut free: Vec<(bool, f64, i32, i32)> = Vec::new();
         for row in low.1 - margin..=high.1 + margin {
             for col in low.0 - margin..=high.0 + margin {
                 if !taken.contains(&(col, row)) {
-                    let centre = lattice.centre(col, row);
-                    let own = distance_to(index, centre);
-                    let elsewhere = others.iter().any(|o| distance_to(o, centre) < own);
+                    let (own, elsewhere) = outlines.distance(part, lattice.centre(col, row));
                     free.push((elsewhere, own, row, col));
                 }
             }
@@ -160,9 +195,17 @@ fn nearest_free(
                 .then(a.3.cmp(&b.3))
         });
         // Positions nearer another landmass are settled only once the square holds enough
-        // positions that are not: otherwise a wider square may offer some.
+        // positions that are not: otherwise a wider square may offer some. The square grows
+        // at most two doublings past the first that held enough positions (and past 4(k + 1)
+        // for a small landmass): a landmass ringed by islands has no own side farther out,
+        // and a search to the lattice's ends would take minutes.
         let own_side = free.iter().filter(|f| !f.0).count();
-        if own_side >= count || (free.len() >= count && margin > 4 * (count as i32 + 1)) {
+        if free.len() >= count {
+            enough_at.get_or_insert(margin);
+        }
+        let searched_enough =
+            enough_at.is_some_and(|first| margin > (4 * (count as i32 + 1)).min(4 * first));
+        if own_side >= count || searched_enough {
             return free[..count]
                 .iter()
                 .map(|&(_, _, row, col)| {
@@ -180,10 +223,342 @@ fn nearest_free(
     }
 }
 
+/// Rounds of [`settle`]. Every shift lowers the blocks' cost, so the rounds end by themselves;
+/// two or three do, and the cap only bounds the work.
+const SETTLE_ROUNDS: usize = 8;
+
+/// What [`settle`] places the landmass blocks by.
+pub struct Homes<'a> {
+    /// Per region, where §8 measures it from (its area centroid), in the lattice's frame before
+    /// the fit; also the directions its adjacent pairs should keep.
+    pub places: &'a [Coord<f64>],
+    /// Adjacent region pairs: a pair across two landmasses (a country on a continent and an
+    /// island) pulls their blocks together.
+    pub adjacency: &'a [(usize, usize)],
+    /// Whether region `i` at a fitted position lies nearer another landmass than its own;
+    /// `None` when no region can.
+    pub misplaced: Option<&'a dyn Fn(usize, Coord<f64>) -> bool>,
+}
+
+/// Moves each part's block of cells (its assigned cells and its pool, which `part` tags) by
+/// whole cells to where §8 will measure its regions from; `cells[i]` is region `i`'s index in
+/// `lattice.cells`.
+///
+/// A block takes, among the shifts that keep it off every other part's cells and add no hole
+/// to the layout, the one putting the fewest of its regions on another landmass, then the one of
+/// least refinement energy (method.md §6b): the regions' squared distances from their places
+/// under the §8 fit of the whole layout as the shift leaves it (in fitted cells), plus the
+/// block's pairs with other blocks; then the lowest row and column shift. It moves only if that
+/// is better than staying. The part with the most regions stays (the lowest index among
+/// equals); the others go largest first. A block's
+/// assignment stays optimal: translating all its cells adds the same to every assignment's
+/// cost.
+pub fn settle(lattice: &mut Lattice, cells: &[usize], homes: &Homes, params: &Params) {
+    let parts = lattice.cells.iter().map(|c| c.part + 1).max().unwrap_or(0);
+    if parts < 2 {
+        // One block: the fit's shift already puts it where it belongs.
+        return;
+    }
+    let mut regions_of: Vec<Vec<usize>> = vec![Vec::new(); parts];
+    for (i, &k) in cells.iter().enumerate() {
+        regions_of[lattice.cells[k].part].push(i);
+    }
+    let mut order: Vec<usize> = (0..parts).filter(|&p| !regions_of[p].is_empty()).collect();
+    order.sort_by_key(|&p| (std::cmp::Reverse(regions_of[p].len()), p));
+    // The largest part stays where the Snake put it: the fit has no fixed origin, so moving it
+    // would only do what moving all the others the other way does.
+    order.remove(0);
+    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); cells.len()];
+    for &(i, j) in homes.adjacency.iter().filter(|(i, j)| i != j) {
+        neighbours[i].push(j);
+        neighbours[j].push(i);
+    }
+    let block = Block {
+        cells,
+        homes,
+        neighbours: &neighbours,
+        pairs: PairWeights::of(params),
+        w_location: params.refine_w_location,
+    };
+    let position = |cell: &LatticeCell| (cell.col, cell.row);
+    // Every cell's part, and the assigned cells' parts: what a block may not land on, and what
+    // it may touch.
+    let mut taken: FxHashMap<Position, usize> = (lattice.cells.iter())
+        .map(|c| (position(c), c.part))
+        .collect();
+    // Per part, its cells (assigned and pool), as indexes into `lattice.cells`.
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); parts];
+    for (k, cell) in lattice.cells.iter().enumerate() {
+        members[cell.part].push(k);
+    }
+    let mut assigned: FxHashMap<Position, usize> = (cells.iter())
+        .map(|&k| (position(&lattice.cells[k]), lattice.cells[k].part))
+        .collect();
+    for _ in 0..SETTLE_ROUNDS {
+        let mut all = FitSums::of((0..cells.len()).map(|i| block.pair(lattice, i)));
+        let mut moved = false;
+        for &part in &order {
+            let regions = &regions_of[part];
+            let own = FitSums::of(regions.iter().map(|&i| block.pair(lattice, i)));
+            let board = Board {
+                members: &members[part],
+                taken: &taken,
+                assigned: &assigned,
+                all: &all,
+                own: &own,
+            };
+            let Some(shift) = block.best_shift(lattice, part, regions, &board) else {
+                continue;
+            };
+            let moving = &members[part];
+            for &k in moving {
+                taken.remove(&position(&lattice.cells[k]));
+                assigned.remove(&position(&lattice.cells[k]));
+            }
+            let is_assigned: FxHashSet<usize> = regions.iter().map(|&i| cells[i]).collect();
+            for &k in moving {
+                let cell = &mut lattice.cells[k];
+                cell.col += shift.0;
+                cell.row += shift.1;
+                // Off the moved outline's coverage now: the score no longer describes it.
+                cell.score = 0.0;
+                taken.insert(position(cell), part);
+                if is_assigned.contains(&k) {
+                    assigned.insert(position(cell), part);
+                }
+            }
+            all = all.shifted(&own, block.offset(lattice, shift));
+            moved = true;
+        }
+        if !moved {
+            return;
+        }
+    }
+}
+
+/// Where the other blocks are, and the fit's sums, for one block's shift.
+struct Board<'a> {
+    /// The block's cells, as indexes into the lattice's.
+    members: &'a [usize],
+    /// Every lattice cell's position and part.
+    taken: &'a FxHashMap<Position, usize>,
+    /// The assigned cells' positions and parts.
+    assigned: &'a FxHashMap<Position, usize>,
+    /// The fit's sums over all regions, and over the block's.
+    all: &'a FitSums,
+    own: &'a FitSums,
+}
+
+/// What [`settle`] weighs a block's shift with.
+struct Block<'a> {
+    cells: &'a [usize],
+    homes: &'a Homes<'a>,
+    /// Per region, its adjacent regions.
+    neighbours: &'a [Vec<usize>],
+    pairs: PairWeights,
+    /// `refine_w_location`, per squared cell.
+    w_location: f64,
+}
+
+/// The sums the least-squares fit of cell centres g onto places c needs (see [`fit`]), so that
+/// the fit of a layout with one block shifted costs O(1).
+#[derive(Clone, Copy)]
+struct FitSums {
+    n: f64,
+    g: Coord<f64>,
+    c: Coord<f64>,
+    gg: f64,
+    gc: f64,
+    cc: f64,
+}
+
+impl FitSums {
+    fn of(pairs: impl Iterator<Item = (Coord<f64>, Coord<f64>)>) -> FitSums {
+        let zero = Coord { x: 0.0, y: 0.0 };
+        pairs.fold(
+            FitSums {
+                n: 0.0,
+                g: zero,
+                c: zero,
+                gg: 0.0,
+                gc: 0.0,
+                cc: 0.0,
+            },
+            |s, (g, c)| FitSums {
+                n: s.n + 1.0,
+                g: s.g + g,
+                c: s.c + c,
+                gg: s.gg + dot(g, g),
+                gc: s.gc + dot(g, c),
+                cc: s.cc + dot(c, c),
+            },
+        )
+    }
+
+    /// The sums with the centres of `block` (its own sums) moved by `d`.
+    fn shifted(&self, block: &FitSums, d: Coord<f64>) -> FitSums {
+        FitSums {
+            g: self.g + d * block.n,
+            gg: self.gg + 2.0 * dot(d, block.g) + block.n * dot(d, d),
+            gc: self.gc + dot(d, block.c),
+            ..*self
+        }
+    }
+
+    /// The fit's scale and shift, as [`fit`] makes them, and its squared residual in fitted
+    /// units (the sum of |c − (s·g + t)|² / s²).
+    fn fit(&self) -> (f64, Coord<f64>, f64) {
+        let n = self.n.max(1.0);
+        let variance = self.gg - dot(self.g, self.g) / n;
+        let covariance = self.gc - dot(self.g, self.c) / n;
+        let spread = self.cc - dot(self.c, self.c) / n;
+        let scale = if variance > 0.0 && covariance != 0.0 && self.n > 1.0 {
+            covariance / variance
+        } else {
+            1.0
+        };
+        let residual = spread - 2.0 * scale * covariance + scale * scale * variance;
+        let offset = (self.c - self.g * scale) / n;
+        (scale, offset, residual.max(0.0) / (scale * scale))
+    }
+}
+
+fn dot(a: Coord<f64>, b: Coord<f64>) -> f64 {
+    a.x * b.x + a.y * b.y
+}
+
+impl Block<'_> {
+    /// Region `i`'s cell centre and place: one term of the fit.
+    fn pair(&self, lattice: &Lattice, i: usize) -> (Coord<f64>, Coord<f64>) {
+        let cell = &lattice.cells[self.cells[i]];
+        (lattice.centre(cell.col, cell.row), self.homes.places[i])
+    }
+
+    /// A shift by whole cells (rows downwards) as a vector in the lattice's frame.
+    fn offset(&self, lattice: &Lattice, (du, dv): Position) -> Coord<f64> {
+        Coord {
+            x: f64::from(du) * lattice.cell_size,
+            y: -f64::from(dv) * lattice.cell_size,
+        }
+    }
+
+    /// The shift [`settle`] gives the block of `part` (holding `regions`), or `None` to stay.
+    fn best_shift(
+        &self,
+        lattice: &Lattice,
+        part: usize,
+        regions: &[usize],
+        board: &Board,
+    ) -> Option<Position> {
+        let size = lattice.cell_size;
+        let at = |region: usize| {
+            let cell = &lattice.cells[self.cells[region]];
+            (cell.col, cell.row)
+        };
+        let centre = |(col, row): Position| lattice.centre(col, row);
+        let inside = |region: usize| lattice.cells[self.cells[region]].part == part;
+        let places = self.homes.places;
+        let cost = |(du, dv): Position| {
+            let moved = |i: usize| {
+                let (col, row) = at(i);
+                (col + du, row + dv)
+            };
+            let d = self.offset(lattice, (du, dv));
+            let (scale, offset, residual) = board.all.shifted(board.own, d).fit();
+            let wrong = self.homes.misplaced.map_or(0, |misplaced| {
+                (regions.iter())
+                    .filter(|&&i| misplaced(i, centre(moved(i)) * scale + offset))
+                    .count()
+            });
+            let pairs: f64 = (regions.iter())
+                .flat_map(|&i| self.neighbours[i].iter().map(move |&j| (i, j)))
+                .filter(|&(_, j)| !inside(j))
+                .map(|(i, j)| self.pairs.energy(places[j] - places[i], moved(i), at(j)))
+                .sum();
+            (wrong, self.w_location * residual / (size * size) + pairs)
+        };
+        // Where the block's regions lie from their cells under the present fit, in cells (rows
+        // downwards). The fit follows the block part of the way, so the search reaches twice as
+        // far, and a cell beyond.
+        let (scale, offset, _) = board.all.fit();
+        let n = regions.len() as f64;
+        let ideal = regions.iter().fold((0.0, 0.0), |(u, v), &i| {
+            let target = (places[i] - offset) / scale;
+            let from = centre(at(i));
+            (
+                u + (target.x - from.x) / (size * n),
+                v + (from.y - target.y) / (size * n),
+            )
+        });
+        let span = |ideal: f64| {
+            let reach = (2.0 * ideal).round() as i32;
+            reach.min(0) - 1..=reach.max(0) + 1
+        };
+        let staying = cost((0, 0));
+        let better = |key: &(usize, f64)| {
+            key.0 < staying.0 || (key.0 == staying.0 && key.1 < staying.1 - 1e-9)
+        };
+        let mut shifts: Vec<((usize, f64), Position)> = Vec::new();
+        for dv in span(ideal.1) {
+            for du in span(ideal.0) {
+                let key = cost((du, dv));
+                if better(&key) {
+                    shifts.push((key, (du, dv)));
+                }
+            }
+        }
+        shifts.sort_by(|a, b| {
+            (a.0 .0.cmp(&b.0 .0))
+                .then(a.0 .1.total_cmp(&b.0 .1))
+                .then(a.1 .1.cmp(&b.1 .1))
+                .then(a.1 .0.cmp(&b.1 .0))
+        });
+        let block: Vec<Position> = (board.members.iter())
+            .map(|&k| (lattice.cells[k].col, lattice.cells[k].row))
+            .collect();
+        let own_cells: Vec<Position> = regions.iter().map(|&i| at(i)).collect();
+        // Whether the block's assigned cells, shifted, touch another block's: only then can the
+        // shift change the layout's holes (a block apart from the rest neither closes nor
+        // opens any).
+        let touches = |(du, dv): Position| {
+            (own_cells.iter()).any(|&(c, r)| {
+                (-1..=1).any(|dr| {
+                    (-1..=1).any(|dc| {
+                        let near = (c + du + dc, r + dv + dr);
+                        board.assigned.get(&near).is_some_and(|&p| p != part)
+                    })
+                })
+            })
+        };
+        let layout = |(du, dv): Position| -> Vec<Position> {
+            (0..self.cells.len())
+                .map(|i| {
+                    let (col, row) = at(i);
+                    if inside(i) {
+                        (col + du, row + dv)
+                    } else {
+                        (col, row)
+                    }
+                })
+                .collect()
+        };
+        let holes = std::cell::OnceCell::new();
+        shifts.into_iter().map(|(_, shift)| shift).find(|&shift| {
+            let free = (block.iter()).all(|&(c, r)| {
+                (board.taken.get(&(c + shift.0, r + shift.1))).is_none_or(|&p| p == part)
+            });
+            free && (!(touches((0, 0)) || touches(shift))
+                || LayoutShape::of(&layout(shift)).holes()
+                    <= *holes.get_or_init(|| LayoutShape::of(&layout((0, 0))).holes()))
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::core::grid::frame;
+    use crate::core::tiling::Square;
     use geo::{LineString, Polygon};
 
     fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> MultiPolygon<f64> {
@@ -217,6 +592,38 @@ mod tests {
     }
 
     #[test]
+    fn a_landmass_ringed_by_islands_takes_cells_beyond_the_ring() {
+        // One square cell of land for 40 regions, ringed by 24 one-region islands 4 cells out:
+        // its own side (nearer it than any island) has too few positions, so it takes the
+        // nearest beyond. (How soon the search stops is the benchmark's: bench-quality's
+        // archipelago layer took minutes per layout when it searched to the lattice's ends.)
+        let land = rectangle(0.0, 0.0, 1.0, 1.0);
+        let mut parts = vec![land.clone()];
+        for k in 0..24 {
+            let angle = f64::from(k) * std::f64::consts::TAU / 24.0;
+            let (x, y) = (0.5 + 4.5 * angle.cos(), 0.5 + 4.5 * angle.sin());
+            parts.push(rectangle(x - 0.1, y - 0.1, x + 0.1, y + 0.1));
+        }
+        let all = MultiPolygon(parts.iter().flat_map(|p| p.0.clone()).collect());
+        let mut lattice = frame(&all, 64, [0.0, 0.0]);
+        lattice.cell_size = 1.0;
+        let mut demands = vec![1; 25];
+        demands[0] = 40;
+        let selection = select(&lattice, &parts, &demands, 1.0);
+        assert_eq!(selection.cells.len(), 64);
+        let distinct: HashSet<(i32, i32)> =
+            selection.cells.iter().map(|c| (c.col, c.row)).collect();
+        assert_eq!(distinct.len(), 64);
+        // 40 cells round a unit square fit within a 7 × 7 square: none farther than 4 cells
+        // from it, even past the islands.
+        for c in selection.cells.iter().filter(|c| c.part == 0) {
+            let centre = lattice.centre(c.col, c.row);
+            let far = (centre.x - 0.5).abs().max((centre.y - 0.5).abs());
+            assert!(far < 5.0, "{c:?} at {centre:?}");
+        }
+    }
+
+    #[test]
     fn the_pool_adds_free_cells_of_each_part() {
         let land = rectangle(0.0, 0.0, 4.0, 4.0);
         let lattice = frame(&land, 16, [0.0, 0.0]);
@@ -226,5 +633,112 @@ mod tests {
         let distinct: HashSet<(i32, i32)> =
             selection.cells.iter().map(|c| (c.col, c.row)).collect();
         assert_eq!(distinct.len(), 13);
+    }
+
+    /// A unit lattice with a `side` × `side` block of part 0 at columns and rows 0..side (each
+    /// region placed on its own cell) and, last, a lone cell of part 1 at `island`.
+    fn mainland_and_island(side: i32, island: Position) -> (Lattice, Vec<usize>, Vec<Coord<f64>>) {
+        let mut cells: Vec<LatticeCell> = (0..side * side)
+            .map(|k| LatticeCell {
+                col: k % side,
+                row: k / side,
+                score: 2.0,
+                part: 0,
+            })
+            .collect();
+        cells.push(LatticeCell {
+            col: island.0,
+            row: island.1,
+            score: 2.0,
+            part: 1,
+        });
+        let lattice = Lattice {
+            cell_size: 1.0,
+            origin: Coord { x: 0.0, y: 0.0 },
+            cells,
+        };
+        let places = (lattice.cells.iter())
+            .map(|c| lattice.centre(c.col, c.row))
+            .collect();
+        let count = lattice.cells.len();
+        (lattice, (0..count).collect(), places)
+    }
+
+    fn island_at(lattice: &Lattice) -> Position {
+        let island = lattice.cells[lattice.cells.len() - 1];
+        (island.col, island.row)
+    }
+
+    #[test]
+    fn a_block_moves_to_where_its_regions_are_measured_from() {
+        // The island's cell lies 4 cells east of its place, column 6: it moves there, and the
+        // mainland, already on its places, stays.
+        let (mut lattice, cells, mut places) = mainland_and_island(3, (10, 1));
+        places[9] = lattice.centre(6, 1);
+        let homes = Homes {
+            places: &places,
+            adjacency: &[],
+            misplaced: None,
+        };
+        settle(&mut lattice, &cells, &homes, &Params::default());
+        assert_eq!(island_at(&lattice), (6, 1));
+        for (k, cell) in lattice.cells[..9].iter().enumerate() {
+            assert_eq!((cell.col, cell.row), (k as i32 % 3, k as i32 / 3));
+        }
+    }
+
+    #[test]
+    fn a_block_leaves_another_landmass_before_anything_else() {
+        // A mainland of 100 regions holds the fit nearly still. The island's place is column
+        // 12, but west of x = 13 counts as nearer the mainland (in the fitted frame): the island
+        // takes column 13 (centre 13.5), the nearest position east of that.
+        let (mut lattice, cells, mut places) = mainland_and_island(10, (16, 1));
+        places[100] = lattice.centre(12, 1);
+        let misplaced = |region: usize, p: Coord<f64>| region == 100 && p.x < 13.0;
+        let homes = Homes {
+            places: &places,
+            adjacency: &[],
+            misplaced: Some(&misplaced),
+        };
+        settle(&mut lattice, &cells, &homes, &Params::default());
+        assert_eq!(island_at(&lattice), (13, 1));
+    }
+
+    #[test]
+    fn a_block_never_lands_on_another_nor_makes_a_hole() {
+        // The island's place is the mainland's centre cell: it ends beside the block, on a free
+        // position, leaving no hole.
+        let (mut lattice, cells, mut places) = mainland_and_island(3, (10, 1));
+        places[9] = lattice.centre(1, 1);
+        let homes = Homes {
+            places: &places,
+            adjacency: &[],
+            misplaced: None,
+        };
+        settle(&mut lattice, &cells, &homes, &Params::default());
+        let positions: Vec<Position> = lattice.cells.iter().map(|c| (c.col, c.row)).collect();
+        let distinct: HashSet<Position> = positions.iter().copied().collect();
+        assert_eq!(distinct.len(), 10);
+        assert_eq!(LayoutShape::of(&positions).holes(), 0);
+        let island = island_at(&lattice);
+        let beside = lattice.cells[..9]
+            .iter()
+            .any(|c| Square.sharing_an_edge((c.col, c.row), island));
+        assert!(beside, "the island went to {island:?}");
+    }
+
+    #[test]
+    fn a_pair_across_two_landmasses_holds_their_blocks_together() {
+        // Without the pair the island would go 2 cells east to its place; its neighbour on the
+        // mainland's east edge keeps it beside the block.
+        let (mut lattice, cells, mut places) = mainland_and_island(3, (3, 1));
+        places[9] = lattice.centre(5, 1);
+        let homes = Homes {
+            places: &places,
+            adjacency: &[(5, 9)],
+            misplaced: None,
+        };
+        settle(&mut lattice, &cells, &homes, &Params::default());
+        assert_eq!(island_at(&lattice), (3, 1));
     }
 }

@@ -441,6 +441,23 @@ impl LayoutShape {
     }
 }
 
+/// How many times the landmasses' blocks break: over the landmasses (`part[i]` is cell `i`'s),
+/// the edge-connected pieces of each one's cells, less one. A world layout has a piece per
+/// island and continent, which is no defect; a continent in two pieces is one.
+pub(crate) fn landmass_breaks(cells: &[Position], part: &[usize]) -> usize {
+    let parts = part.iter().map(|&p| p + 1).max().unwrap_or(0);
+    (0..parts)
+        .map(|p| {
+            let own: Vec<Position> = (cells.iter().zip(part))
+                .filter(|&(_, &q)| q == p)
+                .map(|(&c, _)| c)
+                .collect();
+            let occupied: HashSet<Position> = own.iter().copied().collect();
+            pieces(&own, &occupied).len().saturating_sub(1)
+        })
+        .sum()
+}
+
 /// The edge-connected components of the cells (duplicates count once), largest first; a tie
 /// keeps the order in which their first cells come.
 fn pieces(cells: &[Position], occupied: &HashSet<Position>) -> Vec<HashSet<Position>> {

@@ -182,11 +182,48 @@ fn anneal(
 }
 
 /// The energy of method.md §6b with its weights, and each region's neighbours.
+/// The refinement's energy of one adjacent pair (method.md §6b): a lost neighbour, the
+/// direction error and a misdirection. Landmass blocks are placed by it too
+/// ([`super::landmass::settle`]).
+pub(crate) struct PairWeights {
+    adjacent: f64,
+    angle: f64,
+    misdirected: f64,
+}
+
+impl PairWeights {
+    pub(crate) fn of(params: &Params) -> PairWeights {
+        PairWeights {
+            adjacent: params.refine_w_adjacent,
+            angle: params.refine_w_angle,
+            misdirected: params.refine_w_misdirected,
+        }
+    }
+
+    /// The energy of an adjacent pair whose original direction is `direction` and whose cells
+    /// are at `from` and `to`. Both orders of the pair give the same value.
+    pub(crate) fn energy(&self, direction: Coord<f64>, from: Position, to: Position) -> f64 {
+        let (cols, rows) = (to.0 - from.0, to.1 - from.1);
+        // Rows grow downwards, y upwards.
+        let (x, y) = (f64::from(cols), -f64::from(rows));
+        let cross = direction.x * y - direction.y * x;
+        let dot = direction.x * x + direction.y * y;
+        // In [0°, 180°]; 0 when the original centroids coincide.
+        let angle = unsigned_angle(cross.abs(), dot).to_degrees();
+        let mut energy = self.angle * angle / 90.0;
+        if !Square.touching(from, to) {
+            energy += self.adjacent;
+        }
+        if angle > 45.0 {
+            energy += self.misdirected;
+        }
+        energy
+    }
+}
+
 struct Problem<'a> {
     layout: &'a Layout<'a>,
-    w_adjacent: f64,
-    w_angle: f64,
-    w_misdirected: f64,
+    pairs: PairWeights,
     /// `refine_w_location` per S'², so that distances count in cells.
     w_location: f64,
     w_landmass: f64,
@@ -207,9 +244,7 @@ impl<'a> Problem<'a> {
         }
         Problem {
             layout,
-            w_adjacent: params.refine_w_adjacent,
-            w_angle: params.refine_w_angle,
-            w_misdirected: params.refine_w_misdirected,
+            pairs: PairWeights::of(params),
             w_location: params.refine_w_location / layout.lattice.cell_size.powi(2),
             w_landmass: params.refine_w_landmass,
             w_notch: params.refine_w_notch,
@@ -223,23 +258,9 @@ impl<'a> Problem<'a> {
     }
 
     /// The energy of an adjacent pair whose original direction is `direction` and whose cells
-    /// are `from` and `to`. Both orders of the pair give the same value.
+    /// are `from` and `to`.
     fn pair(&self, direction: Coord<f64>, from: LatticeCell, to: LatticeCell) -> f64 {
-        let (cols, rows) = (to.col - from.col, to.row - from.row);
-        // Rows grow downwards, y upwards.
-        let (x, y) = (f64::from(cols), -f64::from(rows));
-        let cross = direction.x * y - direction.y * x;
-        let dot = direction.x * x + direction.y * y;
-        // In [0°, 180°]; 0 when the original centroids coincide.
-        let angle = unsigned_angle(cross.abs(), dot).to_degrees();
-        let mut energy = self.w_angle * angle / 90.0;
-        if !Square.touching((from.col, from.row), (to.col, to.row)) {
-            energy += self.w_adjacent;
-        }
-        if angle > 45.0 {
-            energy += self.w_misdirected;
-        }
-        energy
+        (self.pairs).energy(direction, (from.col, from.row), (to.col, to.row))
     }
 
     /// What region `region` costs on `cell` by itself: its distance from its place, and being
