@@ -250,9 +250,8 @@ pub struct Homes<'a> {
 /// under the §8 fit of the whole layout as the shift leaves it (in fitted cells), plus the
 /// block's pairs with other blocks; then the lowest row and column shift. It moves only if that
 /// is better than staying. The part with the most regions stays (the lowest index among
-/// equals); the others go largest first. A block's
-/// assignment stays optimal: translating all its cells adds the same to every assignment's
-/// cost.
+/// equals); the others go largest first. A block's assignment stays optimal: translating all
+/// its cells adds the same to every assignment's cost.
 pub fn settle(lattice: &mut Lattice, cells: &[usize], homes: &Homes, params: &Params) {
     let parts = lattice.cells.iter().map(|c| c.part + 1).max().unwrap_or(0);
     if parts < 2 {
@@ -360,7 +359,7 @@ struct Block<'a> {
     w_location: f64,
 }
 
-/// The sums the least-squares fit of cell centres g onto places c needs (see [`fit`]), so that
+/// The sums the least-squares fit of cell centres g onto places c needs (`metrics::fit`), so that
 /// the fit of a layout with one block shifted costs O(1).
 #[derive(Clone, Copy)]
 struct FitSums {
@@ -405,7 +404,7 @@ impl FitSums {
         }
     }
 
-    /// The fit's scale and shift, as [`fit`] makes them, and its squared residual in fitted
+    /// The fit's scale and shift, as `metrics::fit` makes them, and its squared residual in fitted
     /// units (the sum of |c − (s·g + t)|² / s²).
     fn fit(&self) -> (f64, Coord<f64>, f64) {
         let n = self.n.max(1.0);
