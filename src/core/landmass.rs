@@ -669,6 +669,58 @@ mod tests {
     }
 
     #[test]
+    fn the_fit_from_running_sums_is_the_metrics_fit_also_after_a_shift() {
+        // Points on a skewed spiral, fitted onto a scaled, shifted and disturbed copy.
+        let g: Vec<Coord<f64>> = (0..30)
+            .map(|k| {
+                let t = f64::from(k) * 0.7;
+                Coord {
+                    x: t * t.cos() + 40.0,
+                    y: 0.5 * t * t.sin() - 7.0,
+                }
+            })
+            .collect();
+        let c: Vec<Coord<f64>> = (g.iter().enumerate())
+            .map(|(k, &p)| {
+                p * 1.7
+                    + Coord { x: 3.0, y: -2.0 }
+                    + Coord {
+                        x: (k % 3) as f64,
+                        y: (k % 5) as f64 * 0.3,
+                    }
+            })
+            .collect();
+        let check = |g: &[Coord<f64>], sums: FitSums| {
+            let (scale, offset) = crate::core::metrics::fit(g, &c);
+            let residual: f64 = (g.iter().zip(&c))
+                .map(|(&p, &q)| {
+                    let r = q - (p * scale + offset);
+                    dot(r, r)
+                })
+                .sum::<f64>()
+                / (scale * scale);
+            let (s, t, r) = sums.fit();
+            assert!(
+                (s - scale).abs() < 1e-9 && (t - offset).x.abs() < 1e-9,
+                "{s} {scale}"
+            );
+            assert!(
+                (t - offset).y.abs() < 1e-9 && (r - residual).abs() < 1e-6,
+                "{r} {residual}"
+            );
+        };
+        let all = FitSums::of(g.iter().copied().zip(c.iter().copied()));
+        check(&g, all);
+        // The first ten points moved by (2, −3): the shifted sums give the moved points' fit.
+        let d = Coord { x: 2.0, y: -3.0 };
+        let block = FitSums::of(g[..10].iter().copied().zip(c[..10].iter().copied()));
+        let moved: Vec<Coord<f64>> = (g.iter().enumerate())
+            .map(|(k, &p)| if k < 10 { p + d } else { p })
+            .collect();
+        check(&moved, all.shifted(&block, d));
+    }
+
+    #[test]
     fn a_block_moves_to_where_its_regions_are_measured_from() {
         // The island's cell lies 4 cells east of its place, column 6: it moves there, and the
         // mainland, already on its places, stays.
