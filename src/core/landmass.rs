@@ -50,13 +50,15 @@ pub fn select(
         all
     };
     let mut taken: HashSet<(i32, i32)> = HashSet::new();
-    let assigned = pick(lattice, parts, &scored, demands, &mut taken);
+    // Indexed only if a part falls short, and then once for both picks.
+    let outlines = std::cell::OnceCell::new();
+    let assigned = pick(lattice, parts, &outlines, &scored, demands, &mut taken);
     let extra: Vec<usize> = demands
         .iter()
         // Less a hair, so that 1.3 × 10 (13.000000000000002 in binary) asks for 3 more, not 4.
         .map(|&k| ((ratio - 1.0) * k as f64 - 1e-9).ceil().max(0.0) as usize)
         .collect();
-    let pool = pick(lattice, parts, &scored, &extra, &mut taken);
+    let pool = pick(lattice, parts, &outlines, &scored, &extra, &mut taken);
     let count = assigned.len();
     Selection {
         cells: assigned.into_iter().chain(pool).collect(),
@@ -69,6 +71,7 @@ pub fn select(
 fn pick(
     lattice: &Lattice,
     parts: &[MultiPolygon<f64>],
+    outlines: &std::cell::OnceCell<Outlines>,
     scored: &[LatticeCell],
     wanted: &[usize],
     taken: &mut HashSet<(i32, i32)>,
@@ -84,13 +87,13 @@ fn pick(
     if missing.iter().all(|&short| short == 0) {
         return chosen;
     }
-    let outlines = Outlines::new(parts);
+    let outlines = outlines.get_or_init(|| Outlines::new(parts));
     for (part, &short) in missing.iter().enumerate() {
         if short > 0 {
             chosen.extend(nearest_free(
                 lattice,
                 &parts[part],
-                &outlines,
+                outlines,
                 part,
                 short,
                 taken,
@@ -668,6 +671,26 @@ mod tests {
         (island.col, island.row)
     }
 
+    /// The lattice of [`mainland_and_island`] after [`settle`], the island placed at the centre
+    /// of cell `place`.
+    fn settled(
+        side: i32,
+        island: Position,
+        place: Position,
+        adjacency: &[(usize, usize)],
+        misplaced: Option<&dyn Fn(usize, Coord<f64>) -> bool>,
+    ) -> Lattice {
+        let (mut lattice, cells, mut places) = mainland_and_island(side, island);
+        places[cells.len() - 1] = lattice.centre(place.0, place.1);
+        let homes = Homes {
+            places: &places,
+            adjacency,
+            misplaced,
+        };
+        settle(&mut lattice, &cells, &homes, &Params::default());
+        lattice
+    }
+
     #[test]
     fn the_fit_from_running_sums_is_the_metrics_fit_also_after_a_shift() {
         // Points on a skewed spiral, fitted onto a scaled, shifted and disturbed copy.
@@ -724,14 +747,7 @@ mod tests {
     fn a_block_moves_to_where_its_regions_are_measured_from() {
         // The island's cell lies 4 cells east of its place, column 6: it moves there, and the
         // mainland, already on its places, stays.
-        let (mut lattice, cells, mut places) = mainland_and_island(3, (10, 1));
-        places[9] = lattice.centre(6, 1);
-        let homes = Homes {
-            places: &places,
-            adjacency: &[],
-            misplaced: None,
-        };
-        settle(&mut lattice, &cells, &homes, &Params::default());
+        let lattice = settled(3, (10, 1), (6, 1), &[], None);
         assert_eq!(island_at(&lattice), (6, 1));
         for (k, cell) in lattice.cells[..9].iter().enumerate() {
             assert_eq!((cell.col, cell.row), (k as i32 % 3, k as i32 / 3));
@@ -743,15 +759,8 @@ mod tests {
         // A mainland of 100 regions holds the fit nearly still. The island's place is column
         // 12, but west of x = 13 counts as nearer the mainland (in the fitted frame): the island
         // takes column 13 (centre 13.5), the nearest position east of that.
-        let (mut lattice, cells, mut places) = mainland_and_island(10, (16, 1));
-        places[100] = lattice.centre(12, 1);
         let misplaced = |region: usize, p: Coord<f64>| region == 100 && p.x < 13.0;
-        let homes = Homes {
-            places: &places,
-            adjacency: &[],
-            misplaced: Some(&misplaced),
-        };
-        settle(&mut lattice, &cells, &homes, &Params::default());
+        let lattice = settled(10, (16, 1), (12, 1), &[], Some(&misplaced));
         assert_eq!(island_at(&lattice), (13, 1));
     }
 
@@ -759,14 +768,7 @@ mod tests {
     fn a_block_never_lands_on_another_nor_makes_a_hole() {
         // The island's place is the mainland's centre cell: it ends beside the block, on a free
         // position, leaving no hole.
-        let (mut lattice, cells, mut places) = mainland_and_island(3, (10, 1));
-        places[9] = lattice.centre(1, 1);
-        let homes = Homes {
-            places: &places,
-            adjacency: &[],
-            misplaced: None,
-        };
-        settle(&mut lattice, &cells, &homes, &Params::default());
+        let lattice = settled(3, (10, 1), (1, 1), &[], None);
         let positions: Vec<Position> = lattice.cells.iter().map(|c| (c.col, c.row)).collect();
         let distinct: HashSet<Position> = positions.iter().copied().collect();
         assert_eq!(distinct.len(), 10);
@@ -782,14 +784,7 @@ mod tests {
     fn a_pair_across_two_landmasses_holds_their_blocks_together() {
         // Without the pair the island would go 2 cells east to its place; its neighbour on the
         // mainland's east edge keeps it beside the block.
-        let (mut lattice, cells, mut places) = mainland_and_island(3, (3, 1));
-        places[9] = lattice.centre(5, 1);
-        let homes = Homes {
-            places: &places,
-            adjacency: &[(5, 9)],
-            misplaced: None,
-        };
-        settle(&mut lattice, &cells, &homes, &Params::default());
+        let lattice = settled(3, (3, 1), (5, 1), &[(5, 9)], None);
         assert_eq!(island_at(&lattice), (3, 1));
     }
 }
