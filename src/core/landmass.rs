@@ -297,11 +297,11 @@ pub fn settle(lattice: &mut Lattice, cells: &[usize], homes: &Homes, params: &Pa
         .map(|&k| (position(&lattice.cells[k]), lattice.cells[k].part))
         .collect();
     for _ in 0..SETTLE_ROUNDS {
-        let mut all = FitSums::of((0..cells.len()).map(|i| block.pair(lattice, i)));
+        let mut all = FitSums::of((0..cells.len()).map(|i| block.fit_term(lattice, i)));
         let mut moved = false;
         for &part in &order {
             let regions = &regions_of[part];
-            let own = FitSums::of(regions.iter().map(|&i| block.pair(lattice, i)));
+            let own = FitSums::of(regions.iter().map(|&i| block.fit_term(lattice, i)));
             let board = Board {
                 members: &members[part],
                 taken: &taken,
@@ -431,7 +431,7 @@ fn dot(a: Coord<f64>, b: Coord<f64>) -> f64 {
 
 impl Block<'_> {
     /// Region `i`'s cell centre and place: one term of the fit.
-    fn pair(&self, lattice: &Lattice, i: usize) -> (Coord<f64>, Coord<f64>) {
+    fn fit_term(&self, lattice: &Lattice, i: usize) -> (Coord<f64>, Coord<f64>) {
         let cell = &lattice.cells[self.cells[i]];
         (lattice.centre(cell.col, cell.row), self.homes.places[i])
     }

@@ -446,14 +446,14 @@ impl LayoutShape {
 /// island and continent, which is no defect; a continent in two pieces is one.
 pub(crate) fn landmass_breaks(cells: &[Position], part: &[usize]) -> usize {
     let parts = part.iter().map(|&p| p + 1).max().unwrap_or(0);
-    (0..parts)
-        .map(|p| {
-            let own: Vec<Position> = (cells.iter().zip(part))
-                .filter(|&(_, &q)| q == p)
-                .map(|(&c, _)| c)
-                .collect();
+    let mut of_part: Vec<Vec<Position>> = vec![Vec::new(); parts];
+    for (&cell, &p) in cells.iter().zip(part) {
+        of_part[p].push(cell);
+    }
+    (of_part.iter())
+        .map(|own| {
             let occupied: HashSet<Position> = own.iter().copied().collect();
-            pieces(&own, &occupied).len().saturating_sub(1)
+            pieces(own, &occupied).len().saturating_sub(1)
         })
         .sum()
 }
@@ -868,6 +868,18 @@ mod tests {
             }
         }
         cells
+    }
+
+    #[test]
+    fn a_landmass_in_two_pieces_is_one_break_and_islands_are_none() {
+        // Landmass 0: a row of three cells and, apart, one more (two pieces: one break).
+        // Landmasses 1 and 2: one cell each, apart from everything (no break), and landmass 1
+        // touching landmass 0 does not join them.
+        let cells = [(0, 0), (1, 0), (2, 0), (5, 0), (3, 0), (8, 8)];
+        let part = [0, 0, 0, 0, 1, 2];
+        assert_eq!(landmass_breaks(&cells, &part), 1);
+        assert_eq!(LayoutShape::of(&cells).pieces(), 3);
+        assert_eq!(landmass_breaks(&cells[..3], &part[..3]), 0);
     }
 
     #[test]
