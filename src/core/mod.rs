@@ -24,6 +24,7 @@ mod landmass;
 mod metrics;
 mod network;
 mod outline;
+mod overlay;
 pub mod params;
 mod rank;
 mod refine;

@@ -6,7 +6,7 @@ use super::geometry::{
     interior_point, interior_point_of_all, nearest_on_segment, point_segment_distance2,
     segments_intersect, RingIndex,
 };
-use super::Params;
+use super::{overlay, validity, Params};
 use geo::orient::{Direction, Orient};
 use geo::{
     Area, BoundingRect, Centroid, Contains, Coord, Intersects, LineString, MultiPolygon, Point,
@@ -294,7 +294,12 @@ fn adjacency(
         }
         rest
     };
-    let tree = RTree::bulk_load(searched.clone());
+    // Each edge with its box, which building the tree compares over and over.
+    let tree = RTree::bulk_load(
+        (searched.iter())
+            .map(|e| GeomWithData::new(Rectangle::from_aabb(e.envelope()), *e))
+            .collect(),
+    );
     // In parallel over fixed chunks of edges, summed chunk by chunk in order: the same sums
     // (to the last bit) with any number of threads.
     let per_chunk: Vec<std::collections::BTreeMap<(usize, usize), f64>> = searched
@@ -309,6 +314,7 @@ fn adjacency(
                     [env.upper()[0] + t, env.upper()[1] + t],
                 );
                 for f in tree.locate_in_envelope_intersecting(&search) {
+                    let f = &f.data;
                     if f.region <= e.region || !touches(e, f) {
                         continue;
                     }
@@ -418,7 +424,10 @@ fn merge(regions: &[&MultiPolygon<f64>], clusters: &[Vec<usize>]) -> MultiPolygo
                 .flat_map(|&k| regions[k].0.iter())
                 .map(|p| p.orient(Direction::Default))
                 .collect();
-            geo::unary_union(&oriented).0
+            // A region alone is its own union if it is still valid in this frame, which the
+            // rounding into it can break (subnormal coordinates, found by fuzzing).
+            let alone = group.len() == 1 && validity::problem(regions[group[0]]).is_none();
+            overlay::union(&oriented, alone)
         })
         .collect();
     let lowest = |p: &Polygon<f64>| {

@@ -4,9 +4,10 @@
 //! one region of 200,000 vertices).
 //!
 //! One segment index over all rings of the geometry finds every pair of segments that meet
-//! other than at the vertex joining consecutive segments; such a pair is a crossing, a
-//! collinear overlap or a ring touching itself, all invalid, except that two different rings
-//! may touch at a point. With no such pair, the rings are disjoint curves, so one point of each
+//! other than at the vertex joining consecutive segments (or, where long segments' boxes crowd
+//! the index, a sweep finds the first such pair); such a pair is a crossing, a collinear overlap
+//! or a ring touching itself, all invalid, except that two different rings may touch at a
+//! point. With no such pair, the rings are disjoint curves, so one point of each
 //! ring decides how the rings nest: each hole inside its own shell and outside its polygon's
 //! other holes, no part inside another part.
 
@@ -15,7 +16,9 @@ use geo::kernels::{Kernel, Orientation, RobustKernel};
 use geo::line_intersection::{line_intersection, LineIntersection};
 use geo::{Coord, Line, MultiPolygon};
 use rstar::{Envelope, RTree, RTreeObject, AABB};
+use std::collections::BTreeSet;
 use std::fmt;
+use std::ops::Bound::{Excluded, Unbounded};
 
 /// The first problem found, with a place in the layer's coordinates where there is one.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,6 +59,11 @@ struct RingRole {
 
 /// `None` for a valid geometry (finite coordinates assumed), else the first problem found.
 pub fn problem(geometry: &MultiPolygon<f64>) -> Option<Problem> {
+    check(geometry, |index| index.crowded())
+}
+
+/// The problem, found by the sweep where `sweep` says so, else by comparing nearby pairs.
+fn check(geometry: &MultiPolygon<f64>, sweep: impl Fn(&Runs) -> bool) -> Option<Problem> {
     let mut rings: Vec<Vec<Coord<f64>>> = Vec::new();
     let mut roles: Vec<RingRole> = Vec::new();
     for (polygon, p) in geometry.0.iter().enumerate() {
@@ -79,14 +87,207 @@ pub fn problem(geometry: &MultiPolygon<f64>) -> Option<Problem> {
         }
     }
     let index = Runs::new(&rings);
-    if let Some(problem) = index
-        .pairs()
-        .find_map(|(s, t)| contact(&index, &rings, &s, &t))
-    {
-        return Some(problem);
-    }
-    nesting(&index, &rings, &roles)
+    first_contact(&index, &rings, sweep(&index)).or_else(|| nesting(&index, &rings, &roles))
 }
+
+/// How many runs' boxes cover a point of the geometry's box, on average, above which the
+/// segments are left to the sweep. A boundary of short segments covers a small part of its box
+/// (each run meets two or three neighbouring runs), and comparing the pairs whose boxes meet is
+/// then several times faster than the sweep; long segments whose boxes overlap, like a star's
+/// spikes, cover it hundreds of times over, and those pairs grow with their square.
+const CROWDED: f64 = 8.0;
+
+/// The first problem between segments, found by the sweep or by comparing every pair of
+/// segments whose bounding boxes meet.
+fn first_contact(index: &Runs, rings: &[Vec<Coord<f64>>], by_sweep: bool) -> Option<Problem> {
+    if by_sweep {
+        return sweep(index, rings);
+    }
+    (index.tree.iter())
+        .flat_map(|a| {
+            (index.tree.locate_in_envelope_intersecting(&a.envelope))
+                .filter(move |b| (b.ring, b.start) >= (a.ring, a.start))
+                .map(move |b| (a, b))
+        })
+        .flat_map(|(a, b)| index.segment_pairs(a, b))
+        .find_map(|(s, t)| contact(index, rings, &s, &t))
+}
+
+/// The first contact between segments that makes the rings invalid, found by a sweep from left
+/// to right (a Shamos–Hoey sweep that lets rings touch): a vertical order of the segments the
+/// sweep line crosses, in which a crossing shows as two neighbours meeting. Segments meet only at
+/// vertices or at crossings; at each vertex every pair of segments through it is checked, and
+/// after each change to the order, the new neighbours. Until the first crossing the segments'
+/// order is that of where they start, so the leftmost problem is found before any order goes
+/// wrong, and the sweep stops there. O(n log n) in the segments, however long and close they
+/// are: an index of bounding boxes compares every pair of a star's spikes.
+fn sweep(index: &Runs, rings: &[Vec<Coord<f64>>]) -> Option<Problem> {
+    let mut events: Vec<(Coord<f64>, bool, Swept)> = Vec::new();
+    for (ring, coords) in rings.iter().enumerate() {
+        for i in 0..coords.len() {
+            let s = index.segment(ring, i);
+            let (left, right) = if before(s.a, s.b) {
+                (s.a, s.b)
+            } else {
+                (s.b, s.a)
+            };
+            let swept = Swept {
+                left,
+                right,
+                ring,
+                index: i,
+            };
+            events.push((left, true, swept));
+            events.push((right, false, swept));
+        }
+    }
+    events.sort_by(|(p, _, _), (q, _, _)| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
+    let mut order: BTreeSet<Key> = BTreeSet::new();
+    let check = |u: &Swept, v: &Swept| {
+        let (s, t) = (
+            index.segment(u.ring, u.index),
+            index.segment(v.ring, v.index),
+        );
+        let (s, t) = if (s.ring, s.index) < (t.ring, t.index) {
+            (s, t)
+        } else {
+            (t, s)
+        };
+        contact(index, rings, &s, &t)
+    };
+    for group in events.chunk_by(|(p, _, _), (q, _, _)| p == q) {
+        let p = group[0].0;
+        let (below, above) = (Key::Probe(p, false), Key::Probe(p, true));
+        // Every segment through `p`: those in the order that contain it (ending there or
+        // passing through) and those starting there.
+        let mut through: Vec<Swept> = (order.range((Excluded(&below), Unbounded)))
+            .map_while(|k| k.swept().filter(|s| on_swept(p, s)).copied())
+            .collect();
+        through.extend(group.iter().filter(|e| e.1).map(|e| e.2));
+        for (k, u) in through.iter().enumerate() {
+            if let Some(problem) = through[k + 1..].iter().find_map(|v| check(u, v)) {
+                return Some(problem);
+            }
+        }
+        for (_, _, s) in group.iter().filter(|e| !e.1) {
+            order.remove(&Key::Segment(*s));
+        }
+        for (_, _, s) in group.iter().filter(|e| e.1) {
+            order.insert(Key::Segment(*s));
+        }
+        // The new neighbours: below and above the segments through `p`, or each other.
+        let neighbour = |k: Option<&Key>| k.and_then(Key::swept).copied();
+        let under = neighbour(order.range((Unbounded, Excluded(&below))).next_back());
+        let over = neighbour(order.range((Excluded(&above), Unbounded)).next());
+        let lowest = neighbour(order.range((Excluded(&below), Unbounded)).next());
+        let highest = neighbour(order.range((Unbounded, Excluded(&above))).next_back());
+        let pairs = match (lowest, highest) {
+            (Some(l), Some(h)) if on_swept(p, &l) && on_swept(p, &h) => {
+                [(under, Some(l)), (Some(h), over)]
+            }
+            _ => [(under, over), (None, None)],
+        };
+        for (u, v) in pairs {
+            if let Some(problem) = u.zip(v).and_then(|(u, v)| check(&u, &v)) {
+                return Some(problem);
+            }
+        }
+    }
+    None
+}
+
+/// Sweep order: by x, then y (a vertical segment is swept bottom to top).
+fn before(p: Coord<f64>, q: Coord<f64>) -> bool {
+    (p.x, p.y) < (q.x, q.y)
+}
+
+/// A segment with its ends in sweep order.
+#[derive(Clone, Copy, Debug)]
+struct Swept {
+    left: Coord<f64>,
+    right: Coord<f64>,
+    ring: usize,
+    index: usize,
+}
+
+fn on_swept(p: Coord<f64>, s: &Swept) -> bool {
+    RobustKernel::orient2d(s.left, s.right, p) == Orientation::Collinear
+}
+
+/// An entry of the sweep's vertical order, or a point placed just below (`false`) or above
+/// (`true`) every segment through it, to find the segments around it.
+#[derive(Debug)]
+enum Key {
+    Segment(Swept),
+    Probe(Coord<f64>, bool),
+}
+
+impl Key {
+    fn swept(&self) -> Option<&Swept> {
+        match self {
+            Key::Segment(s) => Some(s),
+            Key::Probe(..) => None,
+        }
+    }
+}
+
+impl Ord for Key {
+    fn cmp(&self, other: &Key) -> std::cmp::Ordering {
+        use std::cmp::Ordering;
+        // Which side of `s` the point `p` lies on: above is counter-clockwise of left → right.
+        let side = |s: &Swept, p: Coord<f64>| match RobustKernel::orient2d(s.left, s.right, p) {
+            Orientation::CounterClockwise => Some(Ordering::Greater),
+            Orientation::Clockwise => Some(Ordering::Less),
+            Orientation::Collinear => None,
+        };
+        match (self, other) {
+            (Key::Probe(_, a), Key::Probe(_, b)) => a.cmp(b),
+            (Key::Probe(p, up), Key::Segment(s)) => side(s, *p).unwrap_or(if *up {
+                Ordering::Greater
+            } else {
+                Ordering::Less
+            }),
+            (Key::Segment(_), Key::Probe(..)) => other.cmp(self).reverse(),
+            (Key::Segment(a), Key::Segment(b)) => {
+                if (a.ring, a.index) == (b.ring, b.index) {
+                    return Ordering::Equal;
+                }
+                // Compared where the later one starts (both are crossed by the sweep line
+                // there), or by where it goes if it starts on the other.
+                let (later, earlier, flip) = if before(a.left, b.left) {
+                    (b, a, true)
+                } else {
+                    (a, b, false)
+                };
+                let order = side(earlier, later.left)
+                    .or_else(|| side(earlier, later.right))
+                    .unwrap_or_else(|| {
+                        // Collinear: an overlap, reported when they meet; any fixed order.
+                        (later.ring, later.index).cmp(&(earlier.ring, earlier.index))
+                    });
+                if flip {
+                    order.reverse()
+                } else {
+                    order
+                }
+            }
+        }
+    }
+}
+
+impl PartialOrd for Key {
+    fn partial_cmp(&self, other: &Key) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl PartialEq for Key {
+    fn eq(&self, other: &Key) -> bool {
+        self.cmp(other) == std::cmp::Ordering::Equal
+    }
+}
+
+impl Eq for Key {}
 
 /// Segments indexed by runs of [`RUN`] consecutive ones of a ring: a dense ring is spatially
 /// coherent, so a run's bounding box is small, and the index holds a run's worth fewer
@@ -155,24 +356,29 @@ impl<'r> Runs<'r> {
         (run.start..run.end).map(move |i| self.segment(run.ring, i))
     }
 
-    /// Every pair of segments whose bounding boxes meet, once each (the first before the
-    /// second in ring, then segment order).
-    fn pairs(&self) -> impl Iterator<Item = (Segment, Segment)> + '_ {
-        self.tree.iter().flat_map(move |a| {
-            self.tree
-                .locate_in_envelope_intersecting(&a.envelope)
-                .filter(move |b| (b.ring, b.start) >= (a.ring, a.start))
-                .flat_map(move |b| {
-                    self.run_segments(a).flat_map(move |s| {
-                        let envelope = s.envelope();
-                        self.run_segments(b)
-                            .filter(move |t| {
-                                (t.ring, t.index) > (s.ring, s.index)
-                                    && t.envelope().intersects(&envelope)
-                            })
-                            .map(move |t| (s, t))
-                    })
+    /// Whether the runs' boxes cover the geometry's box more than [`CROWDED`] times over.
+    fn crowded(&self) -> bool {
+        let area = |b: &AABB<[f64; 2]>| {
+            let (lower, upper) = (b.lower(), b.upper());
+            (upper[0] - lower[0]) * (upper[1] - lower[1])
+        };
+        let covered: f64 = self.tree.iter().map(|run| area(&run.envelope)).sum();
+        covered > CROWDED * area(&self.tree.root().envelope())
+    }
+
+    /// The pairs of segments of runs `a` and `b` whose bounding boxes meet, once each.
+    fn segment_pairs<'a>(
+        &'a self,
+        a: &'a Run,
+        b: &'a Run,
+    ) -> impl Iterator<Item = (Segment, Segment)> + 'a {
+        self.run_segments(a).flat_map(move |s| {
+            let envelope = s.envelope();
+            self.run_segments(b)
+                .filter(move |t| {
+                    (t.ring, t.index) > (s.ring, s.index) && t.envelope().intersects(&envelope)
                 })
+                .map(move |t| (s, t))
         })
     }
 
@@ -203,6 +409,7 @@ impl<'r> Runs<'r> {
 }
 
 /// A problem between `s` and `t`, two segments whose bounding boxes meet.
+#[inline(always)]
 fn contact(index: &Runs, rings: &[Vec<Coord<f64>>], s: &Segment, t: &Segment) -> Option<Problem> {
     if index.follows(s, t) || index.follows(t, s) {
         return spike(index, s, t);
@@ -462,6 +669,104 @@ mod tests {
             "{:?}",
             &disagreements[..disagreements.len().min(3)]
         );
+    }
+
+    #[test]
+    fn the_sweep_and_the_pairs_find_the_same_problems() {
+        use geo::LineString;
+        use rand::{Rng, SeedableRng};
+        // Star-shaped rings snapped to an integer grid: mostly valid, with collinear runs,
+        // vertical segments, holes and parts that touch, cross or nest.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let (mut valid, mut kinds) = (0, std::collections::BTreeSet::new());
+        for case in 0..20_000 {
+            let size = 4 + 2 * (case % 6) as i32;
+            let mut ring = |n: usize, x0: i32, size: i32| {
+                let c = f64::from(x0) + f64::from(size) / 2.0;
+                let coords = (0..n).map(|i| {
+                    let a =
+                        std::f64::consts::TAU * (i as f64 + rng.random_range(0.0..0.9)) / n as f64;
+                    let r = f64::from(size) / 2.0 * rng.random_range(0.3..1.0);
+                    Coord {
+                        x: (c + r * a.cos()).round(),
+                        y: (c + r * a.sin()).round(),
+                    }
+                });
+                let mut ring = LineString(coords.collect());
+                ring.close();
+                ring
+            };
+            let parts = 1 + case % 3;
+            let geometry = MultiPolygon(
+                (0..parts)
+                    .map(|k| {
+                        let holes = match (case + k) % 3 {
+                            0 => vec![ring(3 + case % 3, 2, size - 4)],
+                            _ => vec![],
+                        };
+                        let x0 = k as i32 * (size - 1 - case as i32 % 3);
+                        Polygon::new(ring(3 + (case + k) % 9, x0, size), holes)
+                    })
+                    .collect(),
+            );
+            let by_sweep = super::check(&geometry, |_| true);
+            let by_pairs = super::check(&geometry, |_| false);
+            assert_eq!(
+                by_sweep.is_none(),
+                by_pairs.is_none(),
+                "{geometry:?}: {by_sweep:?} / {by_pairs:?}"
+            );
+            valid += usize::from(by_sweep.is_none());
+            // Either may meet another problem first where a geometry has several.
+            if let Some(problem) = &by_sweep {
+                kinds.insert(
+                    format!("{problem:?}")
+                        .split('(')
+                        .next()
+                        .unwrap()
+                        .to_string(),
+                );
+            }
+        }
+        assert!(valid > 5_000, "too few valid cases: {valid}");
+        assert!(kinds.len() >= 4, "too few kinds of problem: {kinds:?}");
+    }
+
+    #[test]
+    fn a_star_is_left_to_the_sweep_and_a_square_is_not() {
+        // 20,000 spikes whose boxes overlap: valid, then with one tip pulled across its
+        // neighbour.
+        let n = 40_000;
+        let mut coords: Vec<Coord<f64>> = (0..n)
+            .map(|k| {
+                let t = k as f64 / n as f64 * std::f64::consts::TAU;
+                let r = if k % 2 == 0 { 1.0 } else { 0.6 };
+                Coord {
+                    x: r * t.cos(),
+                    y: r * t.sin(),
+                }
+            })
+            .collect();
+        let rings = vec![coords.clone()];
+        assert!(Runs::new(&rings).crowded());
+        let star = |c: &[Coord<f64>]| Polygon::new(geo::LineString(c.to_vec()), vec![]);
+        assert_eq!(check(star(&coords)), None);
+        let t = 3.0 / n as f64 * std::f64::consts::TAU;
+        coords[0] = Coord {
+            x: t.cos(),
+            y: t.sin(),
+        };
+        assert!(matches!(
+            check(star(&coords)),
+            Some(Problem::SelfIntersection(_))
+        ));
+        let square: Vec<Coord<f64>> = (0..n)
+            .map(|k| {
+                let s = (k % (n / 4)) as f64 / (n / 4) as f64;
+                [(s, 0.0), (1.0, s), (1.0 - s, 1.0), (0.0, 1.0 - s)][k / (n / 4)].into()
+            })
+            .collect();
+        assert!(!Runs::new(&[square]).crowded());
     }
 
     #[test]
