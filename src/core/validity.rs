@@ -732,21 +732,26 @@ mod tests {
         assert!(kinds.len() >= 4, "too few kinds of problem: {kinds:?}");
     }
 
-    #[test]
-    fn a_star_is_left_to_the_sweep_and_a_square_is_not() {
-        // 20,000 spikes whose boxes overlap: valid, then with one tip pulled across its
-        // neighbour.
-        let n = 40_000;
-        let mut coords: Vec<Coord<f64>> = (0..n)
+    /// `n` vertices (not closed) alternating between radius 1 and `inner`.
+    fn star_ring(n: usize, inner: f64) -> Vec<Coord<f64>> {
+        (0..n)
             .map(|k| {
                 let t = k as f64 / n as f64 * std::f64::consts::TAU;
-                let r = if k % 2 == 0 { 1.0 } else { 0.6 };
+                let r = if k % 2 == 0 { 1.0 } else { inner };
                 Coord {
                     x: r * t.cos(),
                     y: r * t.sin(),
                 }
             })
-            .collect();
+            .collect()
+    }
+
+    #[test]
+    fn a_star_is_left_to_the_sweep_and_a_square_is_not() {
+        // 20,000 spikes whose boxes overlap: valid, then with one tip pulled across its
+        // neighbour.
+        let n = 40_000;
+        let mut coords = star_ring(n, 0.6);
         let rings = vec![coords.clone()];
         assert!(Runs::new(&rings).crowded());
         let star = |c: &[Coord<f64>]| Polygon::new(geo::LineString(c.to_vec()), vec![]);
@@ -772,18 +777,7 @@ mod tests {
     #[test]
     fn agrees_with_geo_on_a_dense_valid_ring() {
         // A 20,000-vertex star: every vertex near-collinear with its neighbours.
-        let n = 20_000;
-        let ring: Vec<Coord<f64>> = (0..n)
-            .map(|k| {
-                let t = k as f64 / n as f64 * std::f64::consts::TAU;
-                let r = if k % 2 == 0 { 1.0 } else { 0.9999 };
-                Coord {
-                    x: r * t.cos(),
-                    y: r * t.sin(),
-                }
-            })
-            .collect();
-        let star = Polygon::new(geo::LineString(ring), vec![]);
+        let star = Polygon::new(geo::LineString(star_ring(20_000, 0.9999)), vec![]);
         assert_eq!(check(star), None);
     }
 }
