@@ -6,7 +6,7 @@ use super::geometry::{
     interior_point, interior_point_of_all, nearest_on_segment, point_segment_distance2,
     segments_intersect, RingIndex,
 };
-use super::{overlay, validity, Params};
+use super::{overlay, Params};
 use geo::orient::{Direction, Orient};
 use geo::{
     Area, BoundingRect, Centroid, Contains, Coord, Intersects, LineString, MultiPolygon, Point,
@@ -424,10 +424,7 @@ fn merge(regions: &[&MultiPolygon<f64>], clusters: &[Vec<usize>]) -> MultiPolygo
                 .flat_map(|&k| regions[k].0.iter())
                 .map(|p| p.orient(Direction::Default))
                 .collect();
-            // A region alone is its own union if it is still valid in this frame, which the
-            // rounding into it can break (subnormal coordinates, found by fuzzing).
-            let alone = group.len() == 1 && validity::problem(regions[group[0]]).is_none();
-            overlay::union(&oriented, alone)
+            overlay::union(&oriented, group.len() == 1)
         })
         .collect();
     let lowest = |p: &Polygon<f64>| {

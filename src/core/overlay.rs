@@ -13,14 +13,17 @@
 //! One difference is left: where a ring touches another at a point inside a segment, the overlay
 //! nodes the segment there and its shell may start one vertex later; the union is the same.
 
-use geo::{Coord, LineString, Polygon};
+use super::validity;
+use geo::{Coord, LineString, MultiPolygon, Polygon};
 use i_float::adapter::FloatPointAdapter;
 use i_float::int::point::IntPoint;
 
-/// The union of `polygons` (oriented: shells counter-clockwise, holes clockwise). `disjoint`
-/// says that they are the polygons of one valid region, whose union is themselves.
-pub fn union(polygons: &[Polygon<f64>], disjoint: bool) -> Vec<Polygon<f64>> {
-    if !disjoint {
+/// The union of `polygons` (oriented: shells counter-clockwise, holes clockwise). With `alone`,
+/// they are the polygons of one region, whose union is themselves if they are valid here: the
+/// rounding into the unit-cell frame can break a valid region (subnormal coordinates, found by
+/// fuzzing), which the overlay then mends.
+pub fn union(polygons: &[Polygon<f64>], alone: bool) -> Vec<Polygon<f64>> {
+    if !alone || validity::problem(&MultiPolygon(polygons.to_vec())).is_some() {
         return geo::unary_union(polygons).0;
     }
     let points: Vec<[f64; 2]> = rings(polygons)
