@@ -44,6 +44,17 @@
 #endif
 
 /**
+ * The side a of a hexagon of area 1: 3√3/2 · a² = 1 (constants, since the refinement asks for
+ * them with every pair it weighs; a test checks them).
+ */
+#define snakegrid_HEX_SIDE 0.6204032394013997
+
+/**
+ * The width of a hexagon of area 1 across its edges, √3·a: its neighbours' distance.
+ */
+#define snakegrid_HEX_WIDTH 1.0745699318235418
+
+/**
  * What a fallible function did. `SNAKEGRID_OK` is 0, every failure is non-zero, and the
  * values never change between versions (new codes are only ever added at the end).
  *
@@ -655,6 +666,8 @@ void snakegrid_job_free(struct snakegrid_job *job);
  *   projected, else a Lambert azimuthal equal-area CRS at its centre);
  * - "json_report": path of a machine-readable report to write;
  * - "svg": path of a picture of the source and the grid map to write;
+ * - "hexjson": path of the layout as HexJSON to write (hexagonal cells only: parameter cell
+ *   hex);
  * - "label_field": short label field for the picture;
  * - "lco": one layer creation option of the output driver, NAME=VALUE; each call adds one
  *   (as -lco does each time it is given), NULL clears them all;
@@ -866,6 +879,20 @@ SNAKEGRID_MUST_USE
 snakegrid_status snakegrid_result_note(const struct snakegrid_result *result,
                                        size_t index,
                                        const char **out);
+
+/**
+ * The layout as HexJSON (Open Innovations' hexagon map format, as d3-hexjson renders it):
+ * `{"layout": "odd-r" | "even-r" | "odd-q" | "even-q", "hexes": {id: {"q", "r", "n"}}}`, q the
+ * column, r counted from the bottom, n the region's id. The string belongs to the result.
+ *
+ * Fails with SNAKEGRID_INVALID_ARGUMENT for a layout of squares (run with the option cell set to
+ * hex).
+ *
+ * Thread safety: any number of threads may read one result at once.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_result_hexjson(const struct snakegrid_result *result,
+                                          const char **out);
 
 /**
  * Scores an existing layout: `cells` holds one square per region under the region's id (the

@@ -37,9 +37,13 @@ rows="$work/rows.tsv"
 : > "$rows"
 for source in "${layers[@]}"; do
     name="$(basename "$source" .gpkg)"
-    for variant in default plain; do
+    for variant in default plain hex hex-flat; do
         options=("$@")
-        [ "$variant" = plain ] && options+=(-refine false)
+        case "$variant" in
+            plain) options+=(-refine false) ;;
+            hex) options+=(-cell hex) ;;
+            hex-flat) options+=(-cell hex -hex_orientation flat) ;;
+        esac
         grid="$work/$name-$variant.gpkg"
         started=$(date +%s.%N)
         "$cli" -q -id id "${options[@]}" "$grid" "$source"
@@ -67,7 +71,9 @@ done
     echo "reference implementation of method.md §8), which also scores the other tools. Made by"
     echo "\`scripts/bench-quality.sh $*\` on $(date -u +%Y-%m-%d), snakegrid $(git -C "$root" describe --always --dirty),"
     echo "load $(cut -d' ' -f1-3 /proc/loadavg). *default* is the command line's defaults; *plain* is"
-    echo "\`-refine false\` (the paper's method with our landmass budgets). The generated layers come"
+    echo "\`-refine false\` (the paper's method with our landmass budgets); *hex* is \`-cell hex\`"
+    echo "(pointy hexagons) and *hex-flat* adds \`-hex_orientation flat\`: for hexagons the judge's"
+    echo "8-neighbourhood is the six edge neighbours, so adj 8 and adj 4 agree. The generated layers come"
     echo "from \`scripts/make-test-layers.py\`: random Voronoi cells of 300 and 3,000 regions, three"
     echo "far-apart landmasses with islands (\`islands\`), Voronoi cells cut by a winding river gap"
     echo "(\`river\`), and a mainland of 3,000 Voronoi cells ringed by 300 one-region islands"

@@ -33,6 +33,8 @@ pub struct Job {
     pub json_report: Option<String>,
     /// Picture of the source and the grid map side by side (`-svg FILE`).
     pub svg: Option<String>,
+    /// The layout as HexJSON, for hexagonal cells (`-hexjson FILE`).
+    pub hexjson: Option<String>,
     /// Short label field for the picture (`-label`).
     pub label_field: Option<String>,
     /// Dataset creation options, NAME=VALUE (`-dsco`).

@@ -23,8 +23,9 @@ pub mod io;
 pub mod job;
 pub mod wkb;
 
-pub use crate::core::{crs, diagnostics, fields, input, params};
+pub use crate::core::{crs, diagnostics, fields, hexjson, input, params, tiling};
 pub use crate::core::{
-    generate, score, CandidateReport, Error, GridMap, LayoutMetrics, LoadModel, Params, Progress,
-    Region, RegionCell, RegionMetrics, SnakeReport, StopReason, PARAMETERS,
+    generate, score, CandidateReport, CellLayout, Error, GridMap, HexOrientation, LayoutMetrics,
+    LoadModel, Params, Progress, Region, RegionCell, RegionMetrics, SnakeReport, StopReason,
+    PARAMETERS,
 };

@@ -821,6 +821,122 @@ fn the_svg_shows_both_maps_with_labelled_cells() {
 }
 
 #[test]
+fn hexagons_come_with_a_hexjson_file_that_numbers_them_like_the_layer() {
+    let scratch = Scratch::new("hexjson");
+    let src = scratch.input("us_states");
+    for orientation in ["pointy", "flat"] {
+        let (grid, hexjson, report) = (
+            scratch.path(&format!("{orientation}.gpkg")),
+            scratch.path(&format!("{orientation}.hexjson")),
+            scratch.path(&format!("{orientation}.json")),
+        );
+        assert_success(&snakegrid([
+            "-q",
+            "-id",
+            "id",
+            "-cell",
+            "hex",
+            "-hex_orientation",
+            orientation,
+            "-hexjson",
+            p(&hexjson),
+            "-json",
+            p(&report),
+            p(&grid),
+            p(&src),
+        ]));
+        let (_, rows) = read_rows(&grid);
+        // The report names the offset rows (columns): in two cells of one column (row) and
+        // neighbouring rows (columns), the offset one lies half a cell right (down).
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        let offset = report["cells"]["offset"].as_str().unwrap();
+        let odd = offset.starts_with("odd");
+        let centre = |row: &Row| {
+            let n = row.ring.len() - 1;
+            assert_eq!(n, 6, "a hexagon has six corners");
+            let (x, y) = row.ring[..n]
+                .iter()
+                .fold((0.0, 0.0), |s, p| (s.0 + p.0, s.1 + p.1));
+            (x / n as f64, y / n as f64)
+        };
+        let at: HashMap<(i64, i64), (f64, f64)> = (rows.iter())
+            .map(|row| {
+                let int = |name: &str| row.fields[name].parse::<i64>().unwrap();
+                ((int("grid_col"), int("grid_row")), centre(row))
+            })
+            .collect();
+        let mut pairs = 0;
+        for (&(col, row), &(x, y)) in &at {
+            let pointy = orientation == "pointy";
+            let next = if pointy {
+                (col, row + 1)
+            } else {
+                (col + 1, row)
+            };
+            let Some(&(nx, ny)) = at.get(&next) else {
+                continue;
+            };
+            pairs += 1;
+            let next_is_offset =
+                (if pointy { next.1 } else { next.0 }).rem_euclid(2) == i64::from(odd);
+            let (ahead, behind) = if pointy { (nx - x, 0.0) } else { (0.0, y - ny) };
+            let step = ahead + behind;
+            assert!(
+                (step > 0.0) == next_is_offset,
+                "{orientation} {offset}: ({col}, {row}) → {next:?} moves {step}"
+            );
+            assert!(offset.contains(if pointy { "rows right" } else { "columns down" }));
+        }
+        assert!(pairs > 10, "{pairs} pairs");
+        let cells: HashMap<String, (i64, i64)> = (rows.iter())
+            .map(|row| {
+                let int = |name: &str| row.fields[name].parse::<i64>().unwrap();
+                (row.fields["id"].clone(), (int("grid_col"), int("grid_row")))
+            })
+            .collect();
+        let doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&hexjson).unwrap()).unwrap();
+        let layout = doc["layout"].as_str().unwrap();
+        let expected: &[&str] = if orientation == "pointy" {
+            &["odd-r", "even-r"]
+        } else {
+            &["odd-q", "even-q"]
+        };
+        assert!(expected.contains(&layout), "{orientation}: {layout}");
+        let hexes = doc["hexes"].as_object().unwrap();
+        assert_eq!(hexes.len(), 49);
+        // The format counts r from the bottom: q follows grid_col and r + grid_row is the same
+        // for every hexagon. The label (abbr) is the hexagon's n.
+        let mut sums = HashSet::new();
+        for (id, hex) in hexes {
+            let (q, r) = (hex["q"].as_i64().unwrap(), hex["r"].as_i64().unwrap());
+            assert!(q >= 0 && r >= 0, "{id}: {q}, {r}");
+            let (col, row) = cells[id];
+            assert_eq!(q - col, 1, "{id}");
+            sums.insert(r + row);
+        }
+        assert_eq!(sums.len(), 1, "{sums:?}");
+        assert_eq!(hexes["06"]["n"], "CA");
+        assert_eq!(hexes["06"]["name"], "California");
+    }
+    // Squares have no HexJSON: refused before the layout, nothing written.
+    let before = scratch.listing();
+    assert_fails(
+        &snakegrid([
+            "-q",
+            "-hexjson",
+            p(&scratch.path("squares.hexjson")),
+            p(&scratch.path("squares.gpkg")),
+            p(&src),
+        ]),
+        1,
+        "-cell hex",
+    );
+    assert_eq!(scratch.listing(), before);
+}
+
+#[test]
 fn world_countries_nc_and_virginia_counties_give_complete_outputs() {
     let scratch = Scratch::new("other-layers");
     for layer in ["world_countries", "nc_counties", "virginia_counties"] {

@@ -1110,13 +1110,15 @@ fn the_svg_is_xml_with_one_label_size_and_labels_that_fit() {
             .collect();
         assert_eq!(sizes.len(), 1, "one label size: {sizes:?}");
         for label in &labels {
-            let side: f64 = label
-                .prev_sibling_element()
+            // The cell before the label: its polygon's width.
+            let xs: Vec<f64> = (label.prev_sibling_element().unwrap())
+                .attribute("points")
                 .unwrap()
-                .attribute("width")
-                .unwrap()
-                .parse()
-                .unwrap();
+                .split(' ')
+                .map(|p| p.split(',').next().unwrap().parse().unwrap())
+                .collect();
+            let side = xs.iter().copied().fold(f64::MIN, f64::max)
+                - xs.iter().copied().fold(f64::MAX, f64::min);
             let font: f64 = label.attribute("font-size").unwrap().parse().unwrap();
             let chars = label.text().unwrap_or("").chars().count() as f64;
             assert!(

@@ -51,7 +51,11 @@ fn judge(regions: &Path, grid: &Path) -> serde_json::Value {
 
 /// Lays `layer` out with `extra` options and compares the report with the judge.
 fn agrees(layer: &str, extra: &[&str]) {
-    let scratch = Scratch::new(&format!("judge-{layer}"));
+    // A folder per layer and options: the tests run side by side.
+    let options: String = (extra.concat().chars())
+        .filter(char::is_ascii_alphanumeric)
+        .collect();
+    let scratch = Scratch::new(&format!("judge-{layer}-{options}"));
     let (grid, report) = (scratch.path("grid.gpkg"), scratch.path("report.json"));
     let source = shared_layer(layer);
     let mut args = vec!["-q", "-id", "id", "-json", p(&report)];
@@ -88,4 +92,23 @@ fn the_metrics_are_the_judges_on_every_shared_layer() {
     }
     // One candidate keeps the large layer quick; the metrics are the same code.
     agrees("us_counties", &["-shifts", "0:0", "-noise_levels", ""]);
+}
+
+#[test]
+fn hexagon_metrics_are_the_judges_on_every_shared_layer() {
+    // The judge reads hexagons from the polygons alone: six edge neighbours (centres closer
+    // than 1.5 √area), gaps from the six steps. Both orientations, every shared layer.
+    for layer in [
+        "us_states",
+        "nc_counties",
+        "virginia_counties",
+        "world_countries",
+    ] {
+        agrees(layer, &["-cell", "hex"]);
+        agrees(layer, &["-cell", "hex", "-hex_orientation", "flat"]);
+    }
+    agrees(
+        "us_counties",
+        &["-cell", "hex", "-shifts", "0:0", "-noise_levels", ""],
+    );
 }

@@ -6,7 +6,8 @@
 use geo::{Area, BooleanOps, Contains, MultiPolygon, Point, Validation};
 use snakegrid::diagnostics::SnakeNetwork;
 use snakegrid::io::{read_regions, Job};
-use snakegrid::{generate, score, GridMap, Params, Region, StopReason};
+use snakegrid::params::CellShape;
+use snakegrid::{generate, score, GridMap, HexOrientation, Params, Region, StopReason};
 
 mod common;
 
@@ -77,6 +78,75 @@ fn us_states_beats_tilemaps_and_the_snake_does_real_work() {
     // The New York Times' hand-made layout of these states is 1 piece with no hole
     // (method.md §8); so is ours.
     assert_eq!((map.metrics.pieces, map.metrics.holes), (1, 0));
+}
+
+/// The defaults with hexagonal cells.
+fn hexagons(orientation: HexOrientation) -> Params {
+    Params {
+        cell: CellShape::Hex,
+        hex_orientation: orientation,
+        ..Params::default()
+    }
+}
+
+#[test]
+fn us_states_and_nc_counties_in_hexagons_beat_the_other_tools() {
+    // Issue 16's bars, from the shared judge's figures for the other hexagon layouts: us_states
+    // R tilemaps 0.710 and 27.8°, carto-flow 0.776 and 30.9°, NPR's hand-made map 0.776 and
+    // 29.0°; nc_counties tilemaps 0.779, carto-flow 0.784. For hexagons every neighbour shares
+    // an edge, so C_adjacent and its rook share are one figure.
+    for orientation in [HexOrientation::Pointy, HexOrientation::Flat] {
+        let regions = load("us_states");
+        let map = run(&regions, &hexagons(orientation));
+        assert_valid_grid(&regions, &map);
+        let m = map.metrics;
+        assert_eq!(m.adjacent, m.adjacent_rook);
+        assert!(
+            m.adjacent >= 0.80,
+            "{orientation:?}: C_adjacent {}",
+            m.adjacent
+        );
+        assert!(m.orientation <= 25.0, "{orientation:?}: {}°", m.orientation);
+        assert_eq!((m.pieces, m.holes), (1, 0), "{orientation:?}");
+        let regions = load("nc_counties");
+        let map = run(&regions, &hexagons(orientation));
+        assert_valid_grid(&regions, &map);
+        assert!(
+            map.metrics.adjacent >= 0.80,
+            "nc {orientation:?}: {}",
+            map.metrics.adjacent
+        );
+    }
+}
+
+#[test]
+fn hexagon_layouts_do_not_depend_on_ids_or_order_and_score_again_the_same() {
+    for (name, orientation) in [
+        ("us_states", HexOrientation::Pointy),
+        ("virginia_counties", HexOrientation::Flat),
+        ("world_countries", HexOrientation::Pointy),
+    ] {
+        let regions = load(name);
+        let params = hexagons(orientation);
+        common::assert_ids_and_order_do_not_matter(&regions, &params);
+        // The metrics of a written hexagon layout, read back from its cells alone.
+        let map = run(&regions, &params);
+        let cells: Vec<geo::Polygon<f64>> = map.cells.iter().map(|c| c.cell.clone()).collect();
+        let (metrics, _) = score(&regions, &cells).unwrap();
+        assert!(
+            (metrics.adjacent - map.metrics.adjacent).abs() < 1e-12,
+            "{name}"
+        );
+        assert!(
+            (metrics.orientation - map.metrics.orientation).abs() < 1e-9,
+            "{name}"
+        );
+        assert_eq!(
+            (metrics.pieces, metrics.holes, metrics.notches),
+            (map.metrics.pieces, map.metrics.holes, map.metrics.notches),
+            "{name}"
+        );
+    }
 }
 
 #[test]

@@ -134,6 +134,7 @@ SIGNATURES = {
     "snakegrid_result_moved_outline_wkb": (_STATUS, [_P, _OUT_BYTES, _OUT_SIZE]),
     "snakegrid_result_note_count": (_STATUS, [_P, _OUT_SIZE]),
     "snakegrid_result_note": (_STATUS, [_P, _SIZE, _OUT_TEXT]),
+    "snakegrid_result_hexjson": (_STATUS, [_P, _OUT_TEXT]),
     "snakegrid_field_count": (_SIZE, []),
     "snakegrid_field_info": (_STATUS, [_SIZE, ctypes.POINTER(Field)]),
     "snakegrid_result_field": (_STATUS, [_P, _SIZE, _SIZE, _OUT_DOUBLE]),

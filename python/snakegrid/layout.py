@@ -8,7 +8,7 @@ adds (snakegrid_field_info), so names, types and values are the command line's.
 import ctypes
 import dataclasses
 from dataclasses import dataclass
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Optional
 
 from . import _abi, _geometry, _library
 from .options import set_options
@@ -76,6 +76,9 @@ class GridMap:
     metrics: Any  # LayoutMetrics
     moved_outline: Any
     notes: List[str]
+    #: The layout as HexJSON (Open Innovations' format, keyed and labelled by the ids) for
+    #: hexagonal cells (option cell="hex"); None for squares.
+    hexjson: Optional[str] = None
 
     def table(self):
         """The cells as columns, {"id": [...], <each added field>: [...], "geometry": [...]},
@@ -187,7 +190,16 @@ def _read(lib, result, as_shapely):
         metrics=_copy(LayoutMetrics, layout_metrics),
         moved_outline=_geometry.from_wkb(
             lib.bytes(c.snakegrid_result_moved_outline_wkb, result), as_shapely),
-        notes=[lib.text(c.snakegrid_result_note, result, i) for i in range(notes_count.value)])
+        notes=[lib.text(c.snakegrid_result_note, result, i) for i in range(notes_count.value)],
+        hexjson=_hexjson(lib, result))
+
+
+def _hexjson(lib, result):
+    """The result's HexJSON, or None for a layout of squares (which the library refuses)."""
+    out = ctypes.c_char_p()
+    if lib.c.snakegrid_result_hexjson(result, ctypes.byref(out)) != 0:
+        return None
+    return out.value.decode("utf-8")
 
 
 def score(regions, region_ids, cells, cell_ids, *, region_labels=None, cell_labels=None,

@@ -2,6 +2,7 @@
 parameter table, the same messages, the same working CRS."""
 
 import csv
+import json
 import os
 import re
 import subprocess
@@ -36,6 +37,21 @@ def test_us_states_gives_the_command_line_cells_and_fields(us_states, us_states_
     assert isinstance(grid.moved_outline, shapely.MultiPolygon)
     table = grid.table()
     assert list(table) == ["id", *names, "geometry"] and len(table["id"]) == len(us_states)
+
+
+def test_hexagons_give_the_command_line_cells_and_a_hexjson(us_states, tmp_path):
+    grid = snakegrid.layout(us_states.geometry, us_states["id"], cell="hex",
+                            hex_orientation="flat")
+    cli = cli_grid(str(tmp_path / "hex.gpkg"), US_STATES, "-cell", "hex",
+                   "-hex_orientation", "flat")
+    assert python_cells(grid) == cells_of(cli)
+    assert all(len(cell.geometry.exterior.coords) == 7 for cell in grid.cells)
+    hexes = json.loads(grid.hexjson)
+    assert hexes["layout"] in ("odd-q", "even-q")
+    assert sorted(hexes["hexes"]) == sorted(us_states["id"])
+    assert hexes["hexes"]["06"]["n"] == "06"
+    # Squares have no HexJSON.
+    assert snakegrid.layout(us_states.geometry, us_states["id"]).hexjson is None
 
 
 def test_options_are_the_command_line_parameters():

@@ -4,6 +4,7 @@ repository build."""
 
 import configparser
 import csv
+import json
 import os
 import re
 import subprocess
@@ -163,7 +164,7 @@ def test_parameters_are_the_library_table_in_upper_case(qgis_app):
     table = snakegrid.options()
     method = [p for p in alg.parameterDefinitions()
               if p.name() not in ("INPUT", "ID_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT",
-                                  "OUTLINE")]
+                                  "OUTLINE", "HEXJSON")]
     assert [p.name() for p in method] == [o.name.upper() for o in table]
     assert all(p.name() == p.name().upper() for p in alg.parameterDefinitions())
     for option, parameter in zip(table, method):
@@ -334,6 +335,27 @@ def test_bad_input_gives_the_command_line_message(qgis_app, case, tmp_path):
     with pytest.raises(QgsProcessingException) as error:
         run("gridmap", INPUT=path, ID_FIELD=id_field, OUTPUT="memory:")
     assert str(error.value).split(": ", 1)[1] == cli_message
+
+
+def test_hexagons_give_the_command_line_layout_and_a_hexjson_file(qgis_app, tmp_path):
+    hexjson = str(tmp_path / "us.hexjson")
+    result = run("gridmap", INPUT=US_STATES, ID_FIELD="id", OUTPUT="memory:", CELL="hex",
+                 HEX_ORIENTATION="flat", HEXJSON=hexjson)
+    grid = result["OUTPUT"]
+    expected = layout(cli(str(tmp_path / "cli.gpkg"), US_STATES, "-cell", "hex",
+                          "-hex_orientation", "flat"))
+    assert layout(grid) == expected
+    for feature in grid.getFeatures():
+        assert feature.geometry().constGet().nCoordinates() == 7  # a closed hexagon
+    assert result["HEXJSON"] == hexjson
+    with open(hexjson, encoding="utf-8") as f:
+        document = json.load(f)
+    assert document["layout"] in ("odd-q", "even-q")
+    assert sorted(document["hexes"]) == sorted(expected)
+    # Squares have no HexJSON: refused before the layout.
+    ok, message = algorithm("gridmap").checkParameterValues(
+        {"INPUT": US_STATES, "OUTPUT": "memory:", "HEXJSON": hexjson}, QgsProcessingContext())
+    assert not ok and "hex" in message
 
 
 def test_a_bad_option_is_refused_by_name_before_reading(qgis_app):

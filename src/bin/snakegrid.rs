@@ -63,6 +63,9 @@ struct Cli {
     /// Write a picture of the source map and the grid map side by side
     #[arg(long = "svg", value_name = "FILE", allow_hyphen_values = true)]
     svg: Option<String>,
+    /// Also write the layout as HexJSON (Open Innovations' format; needs -cell hex)
+    #[arg(long = "hexjson", value_name = "FILE", allow_hyphen_values = true)]
+    hexjson: Option<String>,
     /// Short name field for the cells of the -svg picture [default: abbr, else name, else the id]
     #[arg(long = "label", value_name = "FIELD", allow_hyphen_values = true)]
     label: Option<String>,
@@ -366,6 +369,7 @@ fn main() -> ExitCode {
         target_srs: cli.t_srs,
         json_report: cli.json,
         svg: cli.svg,
+        hexjson: cli.hexjson,
         label_field: cli.label,
         dataset_options: cli.dsco,
         layer_options: cli.lco,

@@ -9,7 +9,9 @@ use super::landmass;
 use super::metrics::{self, Scored};
 use super::network::{self, Network};
 use super::outline::{self, Prepared};
+use super::params::HexOrientation;
 use super::snake::{self, SnakeRun};
+use super::tiling::Tiling;
 use super::validity::{self, Problem};
 use super::{
     assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params, Progress,
@@ -576,7 +578,7 @@ impl Context<'_> {
         let m = network.centroids;
         let moved = &run.positions[..m];
         let moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
-        let mut lattice = grid::frame(&moved_outline, m, shift);
+        let mut lattice = grid::frame(&moved_outline, m, shift, Tiling::of(self.params));
         // One multipolygon per part of the outline: polygons_of keeps the parts' order.
         let parts: Vec<MultiPolygon<f64>> = (moved_outline.0.iter())
             .map(|p| MultiPolygon(vec![p.clone()]))
@@ -635,7 +637,7 @@ impl Context<'_> {
             })
             .unzip();
         Ok(Layout {
-            breaks: metrics::landmass_breaks(&positions, &landmasses),
+            breaks: metrics::landmass_breaks(&positions, &landmasses, lattice.tiling),
             lattice,
             cells,
             metrics,
@@ -696,6 +698,7 @@ impl Context<'_> {
             .map(|&(c, r)| f.to_map(lattice.centre(c, r)))
             .collect();
         metrics::evaluate(&Scored {
+            tiling: lattice.tiling,
             reference: &self.reference,
             moved: &moved,
             cells: &col_rows,
@@ -705,7 +708,7 @@ impl Context<'_> {
     }
 
     /// The chosen layout in the input order and in map units, columns and rows counted from the
-    /// top-left used cell.
+    /// top-left used cell (for hexagons, offset columns and rows: [`Tiling::offset_coordinates`]).
     fn grid_map(
         &self,
         regions: &[Region],
@@ -717,17 +720,18 @@ impl Context<'_> {
     ) -> GridMap {
         let f = &self.frame;
         let lattice = &best.lattice;
-        let used: Vec<(i32, i32)> = best
-            .cells
-            .iter()
+        let positions: Vec<(i32, i32)> = (best.cells.iter())
             .map(|&k| (lattice.cells[k].col, lattice.cells[k].row))
+            .collect();
+        let used: Vec<(i32, i32)> = (positions.iter())
+            .map(|&p| lattice.tiling.offset_coordinates(p))
             .collect();
         let col0 = used.iter().map(|c| c.0).min().unwrap_or(0);
         let row0 = used.iter().map(|c| c.1).min().unwrap_or(0);
         let mut cells: Vec<Option<RegionCell>> = vec![None; regions.len()];
         for (k, &input) in order.iter().enumerate() {
             let (col, row) = used[k];
-            let square = lattice.square(col, row);
+            let square = lattice.polygon(positions[k].0, positions[k].1);
             cells[input] = Some(RegionCell {
                 id: regions[input].id.clone(),
                 col: col - col0,
@@ -749,6 +753,13 @@ impl Context<'_> {
             .collect();
         adjacency.sort_unstable();
         GridMap {
+            tiling: lattice.tiling,
+            shifted: match lattice.tiling {
+                // Internally the odd rows (pointy) or columns (flat) sit half a cell further.
+                Tiling::Square => None,
+                Tiling::Hex(HexOrientation::Pointy) => Some((row0 + 1).rem_euclid(2)),
+                Tiling::Hex(HexOrientation::Flat) => Some((col0 + 1).rem_euclid(2)),
+            },
             cells: cells.into_iter().flatten().collect(),
             cell_size: lattice.cell_size * f.scale,
             metrics: best.metrics,

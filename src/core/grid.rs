@@ -14,10 +14,14 @@
 //! Everything is linear in the number of boundary cells plus inside cells, independent of the
 //! number of outline vertices per cell.
 
+use super::params::HexOrientation;
+use super::tiling::{Position, Tiling, HEX_SIDE, HEX_WIDTH};
 use geo::{Area, BoundingRect, Coord, LineString, MultiPolygon, Polygon};
+use rustc_hash::{FxHashMap, FxHashSet};
 
 /// One lattice cell and its score (1 if its centre is inside the outline, plus the covered
-/// share of its area), and the part of the outline (landmass) it is for.
+/// share of its area), and the part of the outline (landmass) it is for. `col` and `row` are
+/// the cell's [`Position`] in the tiling's coordinates (axial q and r for hexagons).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LatticeCell {
     pub col: i32,
@@ -26,12 +30,14 @@ pub struct LatticeCell {
     pub part: usize,
 }
 
-/// A square lattice: column `col` spans x from `origin.x + col·cell_size`, row `row` spans y
-/// downwards from `origin.y − row·cell_size`.
+/// A lattice of cells of area `cell_size²`. Squares: column `col` spans x from
+/// `origin.x + col·cell_size`, row `row` spans y downwards from `origin.y − row·cell_size`.
+/// Hexagons: the centre of (q, r) lies [`Tiling::centre_offset`] cells from `origin`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Lattice {
+    pub tiling: Tiling,
     pub cell_size: f64,
-    /// Top-left corner of cell (0, 0).
+    /// Squares: the top-left corner of cell (0, 0); hexagons: its centre.
     pub origin: Coord<f64>,
     /// Every cell with a positive score, best first (score descending, then row, then column).
     pub cells: Vec<LatticeCell>,
@@ -40,16 +46,42 @@ pub struct Lattice {
 impl Lattice {
     /// The centre of cell (`col`, `row`).
     pub fn centre(&self, col: i32, row: i32) -> Coord<f64> {
-        Coord {
-            x: self.x_at(f64::from(col) + 0.5),
-            y: self.y_at(f64::from(row) + 0.5),
+        match self.tiling {
+            Tiling::Square => Coord {
+                x: self.x_at(f64::from(col) + 0.5),
+                y: self.y_at(f64::from(row) + 0.5),
+            },
+            Tiling::Hex(_) => self.origin + self.tiling.centre_offset((col, row)) * self.cell_size,
         }
     }
 
-    /// The square of cell (`col`, `row`), counter-clockwise from its bottom-left corner. Each
-    /// side is computed from its own lattice line, so neighbouring squares share bit-identical
-    /// corners and their union has no slivers.
-    pub fn square(&self, col: i32, row: i32) -> Polygon<f64> {
+    /// The position whose cell holds `point` (the nearest centre).
+    pub fn position_of(&self, point: Coord<f64>) -> Position {
+        match self.tiling {
+            Tiling::Square => (
+                ((point.x - self.origin.x) / self.cell_size).floor() as i32,
+                ((self.origin.y - point.y) / self.cell_size).floor() as i32,
+            ),
+            Tiling::Hex(_) => (self.tiling).position_at((point - self.origin) / self.cell_size),
+        }
+    }
+
+    /// The polygon of cell (`col`, `row`), counter-clockwise. Each corner is computed from the
+    /// lattice's own integer corner key (squares: from its lattice lines), so neighbouring cells
+    /// share bit-identical corners and their union has no slivers.
+    pub fn polygon(&self, col: i32, row: i32) -> Polygon<f64> {
+        if self.tiling == Tiling::Square {
+            return self.square(col, row);
+        }
+        let mut points: Vec<Coord<f64>> = (self.tiling.corners((col, row)).iter())
+            .map(|&c| self.origin + self.tiling.corner_offset(c) * self.cell_size)
+            .collect();
+        points.push(points[0]);
+        Polygon::new(LineString::from(points), vec![])
+    }
+
+    /// The square of cell (`col`, `row`), counter-clockwise from its bottom-left corner.
+    fn square(&self, col: i32, row: i32) -> Polygon<f64> {
         let (x0, x1) = (self.x_at(f64::from(col)), self.x_at(f64::from(col) + 1.0));
         let (y1, y0) = (self.y_at(f64::from(row)), self.y_at(f64::from(row) + 1.0));
         Polygon::new(
@@ -80,22 +112,43 @@ impl Lattice {
 ///
 /// With no regions or an outline without area there is nothing to fit: the lattice then has a
 /// cell size of 0 and its origin at (0, 0).
-pub fn frame(outline: &MultiPolygon<f64>, regions: usize, shift: [f64; 2]) -> Lattice {
+///
+/// Hexagons: the centre of (0, 0) at (x_min, y_max) moved `shift[0]` cells along the lattice's
+/// q axis and `shift[1]` along its r axis; positions may then be negative.
+pub fn frame(
+    outline: &MultiPolygon<f64>,
+    regions: usize,
+    shift: [f64; 2],
+    tiling: Tiling,
+) -> Lattice {
     let size = (outline.unsigned_area() / regions as f64).sqrt();
     let corner = outline.bounding_rect();
     let (Some(corner), true) = (corner, size.is_finite() && size > 0.0) else {
         return Lattice {
+            tiling,
             cell_size: 0.0,
             origin: Coord { x: 0.0, y: 0.0 },
             cells: Vec::new(),
         };
     };
-    Lattice {
-        cell_size: size,
-        origin: Coord {
+    let origin = match tiling {
+        Tiling::Square => Coord {
             x: corner.min().x + (shift[0] - 1.0) * size,
             y: corner.max().y - (shift[1] - 1.0) * size,
         },
+        Tiling::Hex(_) => {
+            let along = |p: Position, t: f64| tiling.centre_offset(p) * (t * size);
+            Coord {
+                x: corner.min().x,
+                y: corner.max().y,
+            } + along((1, 0), shift[0])
+                + along((0, 1), shift[1])
+        }
+    };
+    Lattice {
+        tiling,
+        cell_size: size,
+        origin,
         cells: Vec::new(),
     }
 }
@@ -118,20 +171,155 @@ impl Lattice {
     /// ordered by row and column rather than by rounding noise, and cells the outline only
     /// grazes drop out.
     pub fn scores(&self, polygons: &MultiPolygon<f64>, part: usize) -> Vec<LatticeCell> {
-        let mut events = Vec::new();
-        for polygon in polygons {
-            // Exteriors add area, holes remove it, whatever the orientation of their rings.
-            ring_events(self, polygon.exterior(), 1.0, &mut events);
-            for hole in polygon.interiors() {
-                ring_events(self, hole, -1.0, &mut events);
+        let mut cells = match self.tiling {
+            Tiling::Square => {
+                let to_lattice = |c: Coord<f64>| Coord {
+                    x: (c.x - self.origin.x) / self.cell_size,
+                    y: (self.origin.y - c.y) / self.cell_size,
+                };
+                let mut cells = Vec::new();
+                sweep(unit_events(polygons, to_lattice), |col, row, area, wind| {
+                    push_cell(&mut cells, col, row, area, wind)
+                });
+                cells
             }
-        }
-        let mut cells = sweep(events);
+            Tiling::Hex(orientation) => self.hex_scores(polygons, orientation),
+        };
         for cell in &mut cells {
             cell.part = part;
         }
         cells
     }
+
+    /// [`Lattice::scores`] for hexagons, exactly. Each hexagon is 6 cells of a fine rectangular
+    /// grid: 4 whole ones and 4 halves cut along their diagonals (see [`diagonal_halves`]). The
+    /// fine grid's whole cells, the parallelograms between its diagonals of either direction
+    /// (unit squares after a shear, which keeps areas) and the winding number at the
+    /// hexagons' centres all come from the square scanline.
+    ///
+    /// Pointy hexagons of side a (width w = √3·a) use fine cells of w/2 × a/2, with X to the
+    /// right and Y up in those units: (q, r) is centred at X = 2q + r, Y = −3r. Flat hexagons
+    /// are pointy ones with x and y exchanged: flat (q, r) is pointy (−r, −q).
+    fn hex_scores(
+        &self,
+        polygons: &MultiPolygon<f64>,
+        orientation: HexOrientation,
+    ) -> Vec<LatticeCell> {
+        let size = self.cell_size;
+        let (half_w, half_a) = (HEX_WIDTH * size / 2.0, HEX_SIDE * size / 2.0);
+        let o = self.origin;
+        // (u, v) = (X, −Y): v downwards, as the scanline counts rows.
+        let fine = |c: Coord<f64>| match orientation {
+            HexOrientation::Pointy => Coord {
+                x: (c.x - o.x) / half_w,
+                y: -(c.y - o.y) / half_a,
+            },
+            HexOrientation::Flat => Coord {
+                x: (c.y - o.y) / half_w,
+                y: -(c.x - o.x) / half_a,
+            },
+        };
+        let areas = |shear: fn(Coord<f64>) -> Coord<f64>| {
+            let mut cells = FxHashMap::default();
+            sweep(
+                unit_events(polygons, |c| shear(fine(c))),
+                |i, j, area, _| {
+                    if area != 0.0 {
+                        cells.insert((i, j), area);
+                    }
+                },
+            );
+            cells
+        };
+        let whole = areas(|c| c);
+        let plus = diagonal_halves(&whole, &areas(|c| Coord { x: c.x + c.y, ..c }), |i, j| {
+            i + j + 1
+        });
+        let minus = diagonal_halves(&whole, &areas(|c| Coord { x: c.x - c.y, ..c }), |i, j| {
+            i - j
+        });
+        // The winding number at fine-cell centres half a cell up and left: at the fine grid's
+        // vertices, where the hexagons' centres are.
+        let mut inside = FxHashSet::default();
+        sweep(
+            unit_events(polygons, |c| fine(c) + Coord { x: 0.5, y: 0.5 }),
+            |i, j, _, wind| {
+                if wind != 0 {
+                    inside.insert((i, j));
+                }
+            },
+        );
+        let mut hexes: Vec<Position> = Vec::new();
+        let mut seen = FxHashSet::default();
+        for &(i, j) in whole.keys() {
+            for cx in [i, i + 1] {
+                for cy in (-j - 2..=-j + 1).filter(|cy| cy.rem_euclid(3) == 0) {
+                    let r = -cy / 3;
+                    if (cx - r).rem_euclid(2) == 0 && seen.insert((cx, cy)) {
+                        hexes.push(((cx - r) / 2, r));
+                    }
+                }
+            }
+        }
+        let mut cells = Vec::with_capacity(hexes.len());
+        for (q, r) in hexes {
+            let (cx, cy) = (2 * q + r, -3 * r);
+            let full = |i, j| whole.get(&(i, j)).copied().unwrap_or(0.0);
+            let half = |h: &FxHashMap<Position, (f64, f64)>, i, j, second: bool| {
+                h.get(&(i, j))
+                    .map_or(0.0, |&(x, y)| if second { y } else { x })
+            };
+            let covered = full(cx - 1, -cy - 1)
+                + full(cx, -cy - 1)
+                + full(cx - 1, -cy)
+                + full(cx, -cy)
+                + half(&plus, cx - 1, -cy - 2, false)
+                + half(&minus, cx, -cy - 2, true)
+                + half(&minus, cx - 1, 1 - cy, false)
+                + half(&plus, cx, 1 - cy, true);
+            let wind = i32::from(inside.contains(&(cx, -cy)));
+            let (col, row) = match orientation {
+                HexOrientation::Pointy => (q, r),
+                HexOrientation::Flat => (-r, -q),
+            };
+            push_cell(&mut cells, col, row, covered / 6.0, wind);
+        }
+        cells
+    }
+}
+
+/// Splits each fine cell's covered area between the two halves its diagonal cuts it into, from
+/// the areas of the sheared cells (parallelograms between two neighbouring diagonals). The
+/// sheared cell `key(i, j)` of row `j` holds the first half of fine cell (i, j) and the second
+/// half of (i + 1, j); the halves of each fine cell add up to its area. Solved along each row
+/// from the right, where nothing is covered. Returns (first, second) per fine cell.
+///
+/// With u + v diagonals (`key` i + j + 1) the first half is the one below-right of the
+/// diagonal (v down), the second above-left; with u − v diagonals (`key` i − j) the first half
+/// is above-right, the second below-left.
+fn diagonal_halves(
+    whole: &FxHashMap<Position, f64>,
+    sheared: &FxHashMap<Position, f64>,
+    key: fn(i32, i32) -> i32,
+) -> FxHashMap<Position, (f64, f64)> {
+    let mut rows: FxHashMap<i32, Vec<i32>> = FxHashMap::default();
+    for &(i, j) in whole.keys() {
+        rows.entry(j).or_default().push(i);
+    }
+    let mut halves = FxHashMap::default();
+    for (j, mut columns) in rows {
+        // Fine cells not covered have empty halves, so only covered ones need solving.
+        columns.sort_unstable_by(|a, b| b.cmp(a));
+        for i in columns {
+            let second_of_next = halves
+                .get(&(i + 1, j))
+                .map_or(0.0, |&(_, y): &(f64, f64)| y);
+            let share = sheared.get(&(key(i, j), j)).copied().unwrap_or(0.0);
+            let first = share - second_of_next;
+            halves.insert((i, j), (first, whole[&(i, j)] - first));
+        }
+    }
+    halves
 }
 
 /// What one segment piece (or one crossing of a row's centre line) does to one row of cells.
@@ -147,14 +335,32 @@ struct Event {
     wind: i32,
 }
 
+/// The events of every ring of `polygons`, taken into unit-square coordinates (u right, v
+/// down) by `to_unit`.
+fn unit_events(
+    polygons: &MultiPolygon<f64>,
+    to_unit: impl Fn(Coord<f64>) -> Coord<f64>,
+) -> Vec<Event> {
+    let mut events = Vec::new();
+    for polygon in polygons {
+        // Exteriors add area, holes remove it, whatever the orientation of their rings.
+        ring_events(polygon.exterior(), &to_unit, 1.0, &mut events);
+        for hole in polygon.interiors() {
+            ring_events(hole, &to_unit, -1.0, &mut events);
+        }
+    }
+    events
+}
+
 /// Adds the events of one closed ring. `role` is +1 for an exterior and −1 for a hole; the
 /// ring's own orientation is normalised so that its inside counts `role` times.
-fn ring_events(lattice: &Lattice, ring: &LineString<f64>, role: f64, events: &mut Vec<Event>) {
-    let to_lattice = |c: &Coord<f64>| Coord {
-        x: (c.x - lattice.origin.x) / lattice.cell_size,
-        y: (lattice.origin.y - c.y) / lattice.cell_size,
-    };
-    let points: Vec<Coord<f64>> = ring.coords().map(to_lattice).collect();
+fn ring_events(
+    ring: &LineString<f64>,
+    to_unit: &impl Fn(Coord<f64>) -> Coord<f64>,
+    role: f64,
+    events: &mut Vec<Event>,
+) {
+    let points: Vec<Coord<f64>> = ring.coords().map(|&c| to_unit(c)).collect();
     // Shoelace area in lattice coordinates; with u right and v down, a ring with a positive
     // value here has its inside on the side that the edge integral counts positively.
     let twice_area: f64 = points
@@ -236,11 +442,12 @@ fn piece_events(row: i32, us: (f64, f64), dv: f64, sign: f64, events: &mut Vec<E
     }
 }
 
-/// Turns the events into the scored cells (unsorted): per row, from right to left, a running
-/// sum of the `left` areas and windings gives each cell what the segments right of it add.
-fn sweep(mut events: Vec<Event>) -> Vec<LatticeCell> {
+/// Turns the events into the covered area and the winding number at the centre of every unit
+/// cell that has either, handed to `emit(col, row, area, wind)`: per row, from right to left, a
+/// running sum of the `left` areas and windings gives each cell what the segments right of it
+/// add.
+fn sweep(mut events: Vec<Event>, mut emit: impl FnMut(i32, i32, f64, i32)) {
     events.sort_unstable_by(|a, b| a.row.cmp(&b.row).then(b.col.cmp(&a.col)));
-    let mut cells = Vec::new();
     for row_events in events.chunk_by(|a, b| a.row == b.row) {
         let row = row_events[0].row;
         let (mut area, mut wind) = (0.0, 0);
@@ -250,11 +457,11 @@ fn sweep(mut events: Vec<Event>) -> Vec<LatticeCell> {
             // Cells between two event columns are crossed by no segment: wholly in or out.
             if wind != 0 || snap(area) > 0.0 {
                 for gap in (col.saturating_add(1)..next_col).rev() {
-                    push_cell(&mut cells, gap, row, area, wind);
+                    emit(gap, row, area, wind);
                 }
             }
             let own: f64 = group.iter().map(|e| e.own).sum();
-            push_cell(&mut cells, col, row, area + own, wind);
+            emit(col, row, area + own, wind);
             area += group.iter().map(|e| e.left).sum::<f64>();
             wind += group.iter().map(|e| e.wind).sum::<i32>();
             next_col = col;
@@ -266,7 +473,6 @@ fn sweep(mut events: Vec<Event>) -> Vec<LatticeCell> {
             "row {row} does not close: {area}"
         );
     }
-    cells
 }
 
 /// Records cell (`col`, `row`) if it has a positive score.
@@ -301,7 +507,7 @@ mod tests {
 
     /// The lattice with every cell `outline` covers, best first: the one-part case.
     fn fit(outline: &MultiPolygon<f64>, regions: usize, shift: [f64; 2]) -> Lattice {
-        let mut lattice = frame(outline, regions, shift);
+        let mut lattice = frame(outline, regions, shift, Tiling::Square);
         if lattice.cell_size > 0.0 {
             lattice.cells = lattice.scores(outline, 0);
             lattice.cells.sort_by(best_first);
@@ -445,6 +651,74 @@ mod tests {
             .sum::<f64>()
             + lattice.cells.iter().filter(|c| c.score == 2.0).count() as f64;
         assert!((covered - 150.0).abs() < 1e-6, "covered {covered} cells");
+    }
+
+    #[test]
+    fn hexagon_scores_match_a_polygon_boolean_per_hexagon() {
+        // Both orientations, shifts along both axes, a map with a lake and an island: every
+        // listed hexagon's score is its covered share (by geo's overlay) plus its centre, every
+        // hexagon near the map that is not listed scores 0, and the shares add up to the area.
+        let outline = map();
+        for orientation in [HexOrientation::Pointy, HexOrientation::Flat] {
+            for shift in [[0.0, 0.0], [0.3, 0.7]] {
+                let tiling = Tiling::Hex(orientation);
+                let mut lattice = frame(&outline, 150, shift, tiling);
+                lattice.cells = lattice.scores(&outline, 0);
+                let s = lattice.cell_size;
+                let reference = |col: i32, row: i32| {
+                    let hexagon = lattice.polygon(col, row);
+                    let area = hexagon.intersection(&outline).unsigned_area() / (s * s);
+                    let inside = outline.contains(&Point::from(lattice.centre(col, row)));
+                    area + if inside { 1.0 } else { 0.0 }
+                };
+                let mut partial = 0;
+                for cell in &lattice.cells {
+                    let expected = reference(cell.col, cell.row);
+                    assert!(
+                        (cell.score - expected).abs() < 1e-6,
+                        "{orientation:?} {shift:?} {cell:?}: {expected}"
+                    );
+                    partial += usize::from(cell.score.fract() != 0.0);
+                }
+                assert!(partial > 30, "{partial} partial hexagons");
+                let listed: std::collections::HashSet<(i32, i32)> =
+                    lattice.cells.iter().map(|c| (c.col, c.row)).collect();
+                let bounds = outline.bounding_rect().unwrap();
+                let (low, high) = (
+                    lattice.position_of(Coord {
+                        x: bounds.min().x,
+                        y: bounds.max().y,
+                    }),
+                    lattice.position_of(Coord {
+                        x: bounds.max().x,
+                        y: bounds.min().y,
+                    }),
+                );
+                let reach = (high.0 - low.0).abs() + (high.1 - low.1).abs() + 2;
+                for q in low.0 - reach..=low.0 + reach {
+                    for r in low.1 - reach..=low.1 + reach {
+                        let centre = lattice.centre(q, r);
+                        let near = centre.x > bounds.min().x - 2.0 * s
+                            && centre.x < bounds.max().x + 2.0 * s
+                            && centre.y > bounds.min().y - 2.0 * s
+                            && centre.y < bounds.max().y + 2.0 * s;
+                        if near && !listed.contains(&(q, r)) {
+                            assert!(reference(q, r) < 1e-9, "({q}, {r}) missing");
+                        }
+                    }
+                }
+                let covered: f64 = (lattice.cells.iter())
+                    .map(|c| {
+                        if c.score >= 1.0 {
+                            c.score - 1.0
+                        } else {
+                            c.score
+                        }
+                    })
+                    .sum();
+                assert!((covered - 150.0).abs() < 1e-6, "covered {covered} hexagons");
+            }
+        }
     }
 
     #[test]

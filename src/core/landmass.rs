@@ -157,22 +157,21 @@ fn nearest_free(
     let Some(bounds) = outline.bounding_rect() else {
         return Vec::new();
     };
-    let position = |c: Coord<f64>| {
-        (
-            ((c.x - lattice.origin.x) / lattice.cell_size).floor() as i32,
-            ((lattice.origin.y - c.y) / lattice.cell_size).floor() as i32,
-        )
-    };
-    let (low, high) = (
-        position(Coord {
-            x: bounds.min().x,
-            y: bounds.max().y,
-        }),
-        position(Coord {
-            x: bounds.max().x,
-            y: bounds.min().y,
-        }),
-    );
+    let corners = [
+        (bounds.min().x, bounds.max().y),
+        (bounds.max().x, bounds.max().y),
+        (bounds.min().x, bounds.min().y),
+        (bounds.max().x, bounds.min().y),
+    ]
+    .map(|(x, y)| lattice.position_of(Coord { x, y }));
+    // The positions' range over the box's corners: for squares its top-left and bottom-right
+    // cells; for hexagons' slanted axes a parallelogram that holds the box.
+    let low = corners
+        .iter()
+        .fold((i32::MAX, i32::MAX), |m, p| (m.0.min(p.0), m.1.min(p.1)));
+    let high = corners
+        .iter()
+        .fold((i32::MIN, i32::MIN), |m, p| (m.0.max(p.0), m.1.max(p.1)));
     // Wide enough to hold `count` free positions beyond the box even if none inside is free.
     let mut margin = (count as f64).sqrt().ceil() as i32 + 1;
     // The first margin whose square settled `count` positions, own side or not.
@@ -189,7 +188,7 @@ fn nearest_free(
         }
         // A position farther than the margin could be beaten by one outside the searched
         // square: take only those the square settles.
-        let settled = f64::from(margin) * lattice.cell_size;
+        let settled = f64::from(margin) * lattice.tiling.pitch() * lattice.cell_size;
         free.retain(|f| f.1 <= settled);
         free.sort_by(|a, b| {
             (a.0.cmp(&b.0))
@@ -436,12 +435,9 @@ impl Block<'_> {
         (lattice.centre(cell.col, cell.row), self.homes.places[i])
     }
 
-    /// A shift by whole cells (rows downwards) as a vector in the lattice's frame.
-    fn offset(&self, lattice: &Lattice, (du, dv): Position) -> Coord<f64> {
-        Coord {
-            x: f64::from(du) * lattice.cell_size,
-            y: -f64::from(dv) * lattice.cell_size,
-        }
+    /// A shift by whole positions as a vector in the lattice's frame.
+    fn offset(&self, lattice: &Lattice, shift: Position) -> Coord<f64> {
+        lattice.tiling.centre_offset(shift) * lattice.cell_size
     }
 
     /// The shift [`settle`] gives the block of `part` (holding `regions`), or `None` to stay.
@@ -484,14 +480,15 @@ impl Block<'_> {
         // far, and a cell beyond.
         let (scale, offset, _) = board.all.fit();
         let n = regions.len() as f64;
-        let ideal = regions.iter().fold((0.0, 0.0), |(u, v), &i| {
+        let mean = regions.iter().fold(Coord { x: 0.0, y: 0.0 }, |d, &i| {
             let target = (places[i] - offset) / scale;
             let from = centre(at(i));
-            (
-                u + (target.x - from.x) / (size * n),
-                v + (from.y - target.y) / (size * n),
-            )
+            Coord {
+                x: d.x + (target.x - from.x) / (size * n),
+                y: d.y + (target.y - from.y) / (size * n),
+            }
         });
+        let ideal = lattice.tiling.fractional(mean);
         let span = |ideal: f64| {
             let reach = (2.0 * ideal).round() as i32;
             reach.min(0) - 1..=reach.max(0) + 1
@@ -550,8 +547,9 @@ impl Block<'_> {
                 (board.taken.get(&(c + shift.0, r + shift.1))).is_none_or(|&p| p == part)
             });
             free && (!(touches((0, 0)) || touches(shift))
-                || LayoutShape::of(&layout(shift)).holes()
-                    <= *holes.get_or_init(|| LayoutShape::of(&layout((0, 0))).holes()))
+                || LayoutShape::of(&layout(shift), lattice.tiling).holes()
+                    <= *holes
+                        .get_or_init(|| LayoutShape::of(&layout((0, 0)), lattice.tiling).holes()))
         })
     }
 }
@@ -560,7 +558,7 @@ impl Block<'_> {
 mod tests {
     use super::*;
     use crate::core::grid::frame;
-    use crate::core::tiling::Square;
+    use crate::core::tiling::Tiling;
     use geo::{LineString, Polygon};
 
     fn rectangle(x0: f64, y0: f64, x1: f64, y1: f64) -> MultiPolygon<f64> {
@@ -577,7 +575,7 @@ mod tests {
         let big = rectangle(0.0, 0.0, 8.0, 8.0);
         let small = rectangle(20.0, 0.0, 22.0, 2.0);
         let all = MultiPolygon(big.0.iter().chain(&small.0).cloned().collect());
-        let lattice = frame(&all, 10, [0.0, 0.0]);
+        let lattice = frame(&all, 10, [0.0, 0.0], Tiling::Square);
         let selection = select(&lattice, &[big.clone(), small.clone()], &[1, 9], 1.0);
         assert_eq!(selection.assigned, 10);
         assert_eq!(selection.cells.len(), 10);
@@ -607,7 +605,7 @@ mod tests {
             parts.push(rectangle(x - 0.1, y - 0.1, x + 0.1, y + 0.1));
         }
         let all = MultiPolygon(parts.iter().flat_map(|p| p.0.clone()).collect());
-        let mut lattice = frame(&all, 64, [0.0, 0.0]);
+        let mut lattice = frame(&all, 64, [0.0, 0.0], Tiling::Square);
         lattice.cell_size = 1.0;
         let mut demands = vec![1; 25];
         demands[0] = 40;
@@ -628,7 +626,7 @@ mod tests {
     #[test]
     fn the_pool_adds_free_cells_of_each_part() {
         let land = rectangle(0.0, 0.0, 4.0, 4.0);
-        let lattice = frame(&land, 16, [0.0, 0.0]);
+        let lattice = frame(&land, 16, [0.0, 0.0], Tiling::Square);
         let selection = select(&lattice, &[land], &[10], 1.3);
         assert_eq!(selection.assigned, 10);
         assert_eq!(selection.cells.len(), 13);
@@ -655,6 +653,7 @@ mod tests {
             part: 1,
         });
         let lattice = Lattice {
+            tiling: Tiling::Square,
             cell_size: 1.0,
             origin: Coord { x: 0.0, y: 0.0 },
             cells,
@@ -772,11 +771,11 @@ mod tests {
         let positions: Vec<Position> = lattice.cells.iter().map(|c| (c.col, c.row)).collect();
         let distinct: HashSet<Position> = positions.iter().copied().collect();
         assert_eq!(distinct.len(), 10);
-        assert_eq!(LayoutShape::of(&positions).holes(), 0);
+        assert_eq!(LayoutShape::of(&positions, Tiling::Square).holes(), 0);
         let island = island_at(&lattice);
         let beside = lattice.cells[..9]
             .iter()
-            .any(|c| Square.sharing_an_edge((c.col, c.row), island));
+            .any(|c| Tiling::Square.sharing_an_edge((c.col, c.row), island));
         assert!(beside, "the island went to {island:?}");
     }
 

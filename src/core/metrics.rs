@@ -12,7 +12,7 @@
 use super::frame::Frame;
 use super::geometry::RingIndex;
 use super::outline::{coords_of, Prepared};
-use super::tiling::{Corner, Position, Square};
+use super::tiling::{Corner, Position, Tiling};
 use super::{LayoutMetrics, RegionMetrics};
 use geo::{Area, Coord, LineString, MultiPolygon, Winding};
 use std::collections::{HashMap, HashSet};
@@ -75,7 +75,9 @@ pub struct Scored<'a> {
     pub reference: &'a Reference,
     /// Moved centroids q_i (for the paper's location variant).
     pub moved: &'a [Coord<f64>],
-    /// Cell (column, row) of each region; rows grow downwards.
+    /// How the cells tile the plane.
+    pub tiling: Tiling,
+    /// Cell position of each region (see [`Tiling`]).
     pub cells: &'a [Position],
     /// Cell centres g_i.
     pub centres: &'a [Coord<f64>],
@@ -197,7 +199,7 @@ pub fn evaluate(layout: &Scored) -> (LayoutMetrics, Vec<RegionMetrics>) {
         incident[i].push(pair);
         incident[j].push(pair);
     }
-    let shape = LayoutShape::of(layout.cells);
+    let shape = LayoutShape::of(layout.cells, layout.tiling);
     let (source_pieces, source_holes) = source_shape(&layout.reference.outline);
 
     let metrics = LayoutMetrics {
@@ -259,8 +261,8 @@ impl PairScore {
     fn of(layout: &Scored, i: usize, j: usize) -> PairScore {
         let (a, b) = (layout.cells[i], layout.cells[j]);
         PairScore {
-            queen: Square.touching(a, b),
-            rook: Square.sharing_an_edge(a, b),
+            queen: layout.tiling.touching(a, b),
+            rook: layout.tiling.sharing_an_edge(a, b),
             angle: angle_deg(
                 layout.reference.centroids[j] - layout.reference.centroids[i],
                 layout.centres[j] - layout.centres[i],
@@ -354,7 +356,8 @@ pub(crate) fn fit(from: &[Coord<f64>], onto: &[Coord<f64>]) -> (f64, Coord<f64>)
     (scale, om - fm * scale)
 }
 
-/// False-neighbour share: of the pairs of touching cells (8-neighbourhood), the share whose
+/// False-neighbour share: of the pairs of touching cells (8-neighbourhood; for hexagons the 6
+/// edge neighbours), the share whose
 /// regions are not adjacent; 0 when no cells touch.
 fn false_neighbours(layout: &Scored) -> f64 {
     let at: HashMap<Position, usize> = (layout.cells.iter().enumerate())
@@ -363,7 +366,7 @@ fn false_neighbours(layout: &Scored) -> f64 {
     let adjacent: HashSet<(usize, usize)> = layout.reference.adjacency.iter().copied().collect();
     let (mut touching, mut false_ones) = (0usize, 0usize);
     for (i, &(c, r)) in layout.cells.iter().enumerate() {
-        for (dc, dr) in [(1, -1), (1, 0), (1, 1), (0, 1)] {
+        for &(dc, dr) in layout.tiling.half_neighbourhood() {
             if let Some(&j) = at.get(&(c + dc, r + dr)) {
                 touching += 1;
                 false_ones += usize::from(!adjacent.contains(&(i.min(j), i.max(j))));
@@ -423,20 +426,20 @@ impl LayoutShape {
         self.holes
     }
 
-    pub(crate) fn of(cells: &[Position]) -> LayoutShape {
+    pub(crate) fn of(cells: &[Position], tiling: Tiling) -> LayoutShape {
         let occupied: HashSet<Position> = cells.iter().copied().collect();
-        let pieces = pieces(cells, &occupied);
+        let pieces = pieces(cells, &occupied, tiling);
         let holes: f64 = pieces
             .iter()
-            .flat_map(boundary_loops)
-            .map(|ring| ring_area(&ring))
+            .flat_map(|piece| boundary_loops(piece, tiling))
+            .map(|ring| ring_area(&ring) / tiling.cell_area_in_corner_units())
             .filter(|&area| area < 0.0)
             .map(f64::abs)
             .sum();
         LayoutShape {
             pieces,
             holes: holes.round() as u32,
-            notches: notches(cells, &occupied),
+            notches: notches(cells, &occupied, tiling),
         }
     }
 }
@@ -444,7 +447,7 @@ impl LayoutShape {
 /// How many times the landmasses' blocks break: over the landmasses (`part[i]` is cell `i`'s),
 /// the edge-connected pieces of each one's cells, less one. A world layout has a piece per
 /// island and continent, which is no defect; a continent in two pieces is one.
-pub(crate) fn landmass_breaks(cells: &[Position], part: &[usize]) -> usize {
+pub(crate) fn landmass_breaks(cells: &[Position], part: &[usize], tiling: Tiling) -> usize {
     let parts = part.iter().map(|&p| p + 1).max().unwrap_or(0);
     let mut of_part: Vec<Vec<Position>> = vec![Vec::new(); parts];
     for (&cell, &p) in cells.iter().zip(part) {
@@ -453,14 +456,18 @@ pub(crate) fn landmass_breaks(cells: &[Position], part: &[usize]) -> usize {
     (of_part.iter())
         .map(|own| {
             let occupied: HashSet<Position> = own.iter().copied().collect();
-            pieces(own, &occupied).len().saturating_sub(1)
+            pieces(own, &occupied, tiling).len().saturating_sub(1)
         })
         .sum()
 }
 
 /// The edge-connected components of the cells (duplicates count once), largest first; a tie
 /// keeps the order in which their first cells come.
-fn pieces(cells: &[Position], occupied: &HashSet<Position>) -> Vec<HashSet<Position>> {
+fn pieces(
+    cells: &[Position],
+    occupied: &HashSet<Position>,
+    tiling: Tiling,
+) -> Vec<HashSet<Position>> {
     let mut unvisited = occupied.clone();
     let mut found = Vec::new();
     for &start in cells {
@@ -470,7 +477,7 @@ fn pieces(cells: &[Position], occupied: &HashSet<Position>) -> Vec<HashSet<Posit
         let mut piece = HashSet::from([start]);
         let mut stack = vec![start];
         while let Some(p) = stack.pop() {
-            for next in Square.edge_neighbours(p) {
+            for &next in tiling.edge_neighbours(p).iter() {
                 if unvisited.remove(&next) {
                     piece.insert(next);
                     stack.push(next);
@@ -485,15 +492,15 @@ fn pieces(cells: &[Position], occupied: &HashSet<Position>) -> Vec<HashSet<Posit
 }
 
 /// Empty positions next to a cell whose sides are all taken but at most one.
-fn notches(cells: &[Position], occupied: &HashSet<Position>) -> u32 {
+fn notches(cells: &[Position], occupied: &HashSet<Position>, tiling: Tiling) -> u32 {
     let mut seen = HashSet::new();
     let mut count = 0;
     for &p in cells {
-        for q in Square.edge_neighbours(p) {
+        for &q in tiling.edge_neighbours(p).iter() {
             if occupied.contains(&q) || !seen.insert(q) {
                 continue;
             }
-            let sides = Square.edge_neighbours(q);
+            let sides = tiling.edge_neighbours(q);
             let taken = sides.iter().filter(|s| occupied.contains(s)).count();
             count += u32::from(taken + 1 >= sides.len());
         }
@@ -509,15 +516,18 @@ fn notches(cells: &[Position], occupied: &HashSet<Position>) -> u32 {
 /// outgoing edges; the walk turns right, so it keeps following the same empty region: each loop
 /// bounds one edge-connected region of empty space, as the rings of a polygon union do (a hole
 /// may touch the outer ring at such a corner, and stays a hole).
-fn boundary_loops(piece: &HashSet<Position>) -> Vec<Vec<Corner>> {
+fn boundary_loops(piece: &HashSet<Position>, tiling: Tiling) -> Vec<Vec<Corner>> {
     let mut outgoing: HashMap<Corner, Vec<Corner>> = HashMap::new();
     // In a fixed order, so that loops and their starts do not depend on the hash set's order.
     let mut cells: Vec<Position> = piece.iter().copied().collect();
-    cells.sort_unstable_by_key(|&(c, r)| (-r, c));
+    cells.sort_unstable_by_key(|&p| {
+        let (x, y) = tiling.centre_key(p);
+        (y, x)
+    });
     for &p in cells.iter().rev() {
-        let corners = Square.corners(p);
-        for (k, n) in Square.edge_neighbours(p).into_iter().enumerate() {
-            if !piece.contains(&n) {
+        let corners = tiling.corners(p);
+        for (k, n) in tiling.edge_neighbours(p).iter().enumerate() {
+            if !piece.contains(n) {
                 outgoing
                     .entry(corners[k])
                     .or_default()
@@ -531,7 +541,7 @@ fn boundary_loops(piece: &HashSet<Position>) -> Vec<Vec<Corner>> {
     // order.
     let mut corners: Vec<Corner> = outgoing.keys().copied().collect();
     corners.sort_unstable();
-    let outer = cells.first().map(|&p| Square.corners(p)[3]);
+    let outer = cells.first().map(|&p| lowest_corner(tiling, p));
     let mut loops = Vec::new();
     loop {
         let single = |c: &&Corner| outgoing.get(c).is_some_and(|ends| ends.len() == 1);
@@ -543,6 +553,20 @@ fn boundary_loops(piece: &HashSet<Position>) -> Vec<Vec<Corner>> {
         };
         loops.push(trace_loop(&mut outgoing, start));
     }
+}
+
+/// The corner of `p` from which the outer loop is walked when `p` is the lowest, then leftmost
+/// cell of its piece: its lowest corner (the leftmost of the lowest), where nothing of the piece
+/// lies below, with exactly one boundary edge leaving it.
+fn lowest_corner(tiling: Tiling, p: Position) -> Corner {
+    let corners = tiling.corners(p);
+    let offset = |c: &Corner| tiling.corner_offset(*c);
+    *(corners.iter())
+        .min_by(|a, b| {
+            let (a, b) = (offset(a), offset(b));
+            a.y.total_cmp(&b.y).then(a.x.total_cmp(&b.x))
+        })
+        .expect("a cell has corners")
 }
 
 /// Follows boundary edges from `start` until the walk is back there, turning right wherever
@@ -676,16 +700,14 @@ fn resample(points: &[Coord<f64>], count: usize) -> Option<Vec<Coord<f64>>> {
 fn cell_ring(layout: &Scored, shape: &LayoutShape) -> Option<LineString<f64>> {
     let (&(col0, row0), &centre0) = layout.cells.first().zip(layout.centres.first())?;
     let piece = shape.pieces.first()?;
-    let outer = boundary_loops(piece).into_iter().next()?;
+    let outer = boundary_loops(piece, layout.tiling).into_iter().next()?;
     let size = layout.cell_size;
-    // Corner offsets are from the centre of position (0, 0); the first cell's centre is at
-    // (col0, −row0) from it.
+    // Corner offsets are from the centre of position (0, 0); the first cell's centre is
+    // centre_offset of its position from it.
+    let first = layout.tiling.centre_offset((col0, row0));
     let to_map = |corner: Corner| {
-        let offset = Square.corner_offset(corner);
-        Coord {
-            x: centre0.x + (offset.x - f64::from(col0)) * size,
-            y: centre0.y + (offset.y + f64::from(row0)) * size,
-        }
+        let offset = layout.tiling.corner_offset(corner) - first;
+        centre0 + offset * size
     };
     Some(outer.into_iter().map(to_map).collect())
 }
@@ -737,6 +759,7 @@ mod tests {
         cell_size: f64,
     ) -> Scored<'a> {
         Scored {
+            tiling: Tiling::Square,
             reference: b,
             moved: &b.centroids,
             cells,
@@ -877,9 +900,9 @@ mod tests {
         // touching landmass 0 does not join them.
         let cells = [(0, 0), (1, 0), (2, 0), (5, 0), (3, 0), (8, 8)];
         let part = [0, 0, 0, 0, 1, 2];
-        assert_eq!(landmass_breaks(&cells, &part), 1);
-        assert_eq!(LayoutShape::of(&cells).pieces(), 3);
-        assert_eq!(landmass_breaks(&cells[..3], &part[..3]), 0);
+        assert_eq!(landmass_breaks(&cells, &part, Tiling::Square), 1);
+        assert_eq!(LayoutShape::of(&cells, Tiling::Square).pieces(), 3);
+        assert_eq!(landmass_breaks(&cells[..3], &part[..3], Tiling::Square), 0);
     }
 
     #[test]
@@ -887,7 +910,7 @@ mod tests {
         // A ring around one hole, a notch in its right side, and a separate cell that touches
         // the ring only at a corner (a piece of its own: corners do not join pieces).
         let ring = cells_of(&["####.", "#.#..", "####.", "....#"]);
-        let shape = LayoutShape::of(&ring);
+        let shape = LayoutShape::of(&ring, Tiling::Square);
         assert_eq!(shape.pieces.len(), 2);
         assert_eq!(shape.pieces[0].len(), 10);
         // The hole (1, 1); the notch (3, 1) has three sides taken (left, top, bottom) and one
@@ -897,11 +920,11 @@ mod tests {
 
         // A pocket that meets the outside only at a corner stays a hole, as in a polygon union.
         let pinched = cells_of(&["###", "#.#", "##."]);
-        let shape = LayoutShape::of(&pinched);
+        let shape = LayoutShape::of(&pinched, Tiling::Square);
         assert_eq!((shape.pieces.len(), shape.holes), (1, 1));
         // A bay two cells deep is no hole; its inner end is a notch, its mouth is not.
         let bay = cells_of(&["###", "#.#", "#.#", "#.#"]);
-        let shape = LayoutShape::of(&bay);
+        let shape = LayoutShape::of(&bay, Tiling::Square);
         assert_eq!((shape.holes, shape.notches), (0, 1));
     }
 
@@ -918,13 +941,14 @@ mod tests {
         let outline = MultiPolygon(vec![]);
         let reference = Reference::of(centres.clone(), vec![], outline, vec![], 2.0);
         let layout = Scored {
+            tiling: Tiling::Square,
             reference: &reference,
             moved: &centres,
             cells: &cells,
             centres: &centres,
             cell_size: 2.0,
         };
-        let shape = LayoutShape::of(&cells);
+        let shape = LayoutShape::of(&cells, Tiling::Square);
         let ring = cell_ring(&layout, &shape).unwrap();
         let polygon = Polygon::new(ring, vec![]);
         assert_eq!(polygon.signed_area(), 40_000.0);
@@ -967,6 +991,7 @@ mod tests {
         };
         let at_home = centres(&cells);
         let layout = Scored {
+            tiling: Tiling::Square,
             reference: &reference,
             moved: &centroids,
             cells: &cells,
@@ -977,6 +1002,7 @@ mod tests {
         cells[2] = (13, 0);
         let moved = centres(&cells);
         let layout = Scored {
+            tiling: Tiling::Square,
             reference: &reference,
             moved: &centroids,
             cells: &cells,

@@ -19,6 +19,7 @@ mod forces;
 mod frame;
 pub(crate) mod geometry;
 mod grid;
+pub mod hexjson;
 pub mod input;
 mod landmass;
 mod metrics;
@@ -30,14 +31,14 @@ mod rank;
 mod refine;
 mod score;
 mod snake;
-mod tiling;
+pub mod tiling;
 mod validity;
 
 use geo::{Coord, MultiPolygon, Polygon};
 use serde::Serialize;
 use std::fmt;
 
-pub use params::{LoadModel, Params, PARAMETERS};
+pub use params::{HexOrientation, LoadModel, Params, PARAMETERS};
 pub use score::score;
 
 /// One input region: a unique id and its (multi)polygon in a planar CRS.
@@ -203,11 +204,12 @@ pub struct RegionMetrics {
 #[derive(Clone, Debug, PartialEq)]
 pub struct RegionCell {
     pub id: String,
-    /// Column from the left (0 = leftmost used column).
+    /// Column from the left (0 = leftmost used column); for hexagons, offset columns (see
+    /// [`GridMap::shifted`]).
     pub col: i32,
     /// Row from the top (0 = topmost used row).
     pub row: i32,
-    /// The square, in map units.
+    /// The square or hexagon, in map units.
     pub cell: Polygon<f64>,
     /// The region's centroid (§1), map units.
     pub centroid: Coord<f64>,
@@ -232,6 +234,12 @@ pub struct CandidateReport {
 /// The result of a run.
 #[derive(Clone, Debug)]
 pub struct GridMap {
+    /// Squares or hexagons.
+    pub tiling: tiling::Tiling,
+    /// For hexagons, the parity (0 or 1) of the rows (pointy) or columns (flat) of
+    /// [`RegionCell`]'s numbering that sit half a cell right (pointy) or down (flat); `None` for
+    /// squares.
+    pub shifted: Option<i32>,
     /// One cell per region, in the order of the input regions.
     pub cells: Vec<RegionCell>,
     /// Side of a cell in map units.
@@ -249,6 +257,46 @@ pub struct GridMap {
     /// What the user should know about the input, e.g. "feature 06: invalid polygon repaired
     /// (...)".
     pub notes: Vec<String>,
+}
+
+/// How the cells of a [`GridMap`] are laid out, as the JSON report and the layer's metadata
+/// name it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CellLayout {
+    /// "square" or "hex".
+    pub shape: &'static str,
+    /// For hexagons, "pointy" or "flat".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<&'static str>,
+    /// For hexagons, which rows (pointy) or columns (flat) of `grid_col`/`grid_row` are offset
+    /// half a cell, and where: e.g. "odd rows right" (rows from 0 at the top).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset: Option<String>,
+}
+
+impl GridMap {
+    /// The layout of the cells (see [`CellLayout`]).
+    pub fn cell_layout(&self) -> CellLayout {
+        let parity = |p: i32| if p == 1 { "odd" } else { "even" };
+        match (self.tiling, self.shifted) {
+            (tiling::Tiling::Hex(orientation), Some(p)) => {
+                let (name, offset) = match orientation {
+                    HexOrientation::Pointy => ("pointy", format!("{} rows right", parity(p))),
+                    HexOrientation::Flat => ("flat", format!("{} columns down", parity(p))),
+                };
+                CellLayout {
+                    shape: "hex",
+                    orientation: Some(name),
+                    offset: Some(offset),
+                }
+            }
+            _ => CellLayout {
+                shape: "square",
+                orientation: None,
+                offset: None,
+            },
+        }
+    }
 }
 
 /// Runs the whole method on `regions` (planar coordinates, unique ids) and returns the best

@@ -20,6 +20,24 @@ pub enum LoadModel {
     Nodal,
 }
 
+/// The shape of the cells (method.md §6, §10).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CellShape {
+    Square,
+    Hex,
+}
+
+/// Which way hexagonal cells point (method.md §10).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HexOrientation {
+    /// A vertex at the top: rows of hexagons, every other row offset half a cell sideways.
+    Pointy,
+    /// An edge at the top: columns of hexagons, every other column offset half a cell down.
+    Flat,
+}
+
 /// The parameters of one run. `Params::default()` is what every face uses; [`PARAMETERS`]
 /// describes each field.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -36,6 +54,8 @@ pub struct Params {
     pub vertices_per_region: f64,
     pub simplify_tolerance: Option<f64>,
     pub point_adjacency: bool,
+    pub cell: CellShape,
+    pub hex_orientation: HexOrientation,
     pub shifts: Vec<[f64; 2]>,
     pub noise_levels: Vec<f64>,
     /// Most candidate layouts; `None`: [`Params::layout_budget`] decides by the number of
@@ -72,6 +92,8 @@ impl Default for Params {
             vertices_per_region: 2.0,
             simplify_tolerance: None,
             point_adjacency: false,
+            cell: CellShape::Square,
+            hex_orientation: HexOrientation::Pointy,
             // A 3×3 set: the lattice's position matters as much as the Snake's noise (measured
             // on the shared layers, 9 shifts found one-piece layouts 4 did not).
             shifts: [0.0, 0.33, 0.67]
@@ -103,6 +125,7 @@ impl Default for Params {
 pub enum Group {
     Snake,
     Outline,
+    Cells,
     Candidates,
     Refinement,
     Ranking,
@@ -114,6 +137,7 @@ impl Group {
         match self {
             Group::Snake => "Snake",
             Group::Outline => "Outline",
+            Group::Cells => "Cells",
             Group::Candidates => "Candidates",
             Group::Refinement => "Refinement",
             Group::Ranking => "Ranking",
@@ -128,6 +152,7 @@ impl Group {
                 "Snake: the beam network that moves centroids and outline (method.md §3–5)"
             }
             Group::Outline => "Outline and adjacency (method.md §1)",
+            Group::Cells => "Cells: squares or hexagons (method.md §6, §10)",
             Group::Candidates => "Candidate layouts (method.md §7)",
             Group::Refinement => "Refinement after the assignment (method.md §6b)",
             Group::Ranking => "Ranking of the candidates (method.md §7)",
@@ -624,6 +649,67 @@ pub static PARAMETERS: &[Parameter] = &[
         access: accessors!(point_adjacency, Bool),
     },
     Parameter {
+        name: "cell",
+        kind: Kind::Choice(&["square", "hex"]),
+        optional: false,
+        min: None,
+        max: None,
+        unit: "",
+        group: Group::Cells,
+        advanced: false,
+        summary: "Cell shape",
+        help: "square: a square lattice, 8 neighbours (edge or corner); hex: hexagons of the same \
+             area, 6 neighbours, all sharing an edge (see hex_orientation).",
+        access: (
+            |p| {
+                Value::Choice(match p.cell {
+                    CellShape::Square => "square",
+                    CellShape::Hex => "hex",
+                })
+            },
+            |p, v| {
+                if let Value::Choice(name) = v {
+                    p.cell = if name == "hex" {
+                        CellShape::Hex
+                    } else {
+                        CellShape::Square
+                    }
+                }
+            },
+        ),
+    },
+    Parameter {
+        name: "hex_orientation",
+        kind: Kind::Choice(&["pointy", "flat"]),
+        optional: false,
+        min: None,
+        max: None,
+        unit: "",
+        group: Group::Cells,
+        advanced: false,
+        summary: "Hexagons pointy- or flat-topped",
+        help: "pointy: a vertex at the top, rows of hexagons with every other row offset half a \
+             cell to the right; flat: an edge at the top, columns with every other column offset \
+             half a cell down. Only used with cell hex.",
+        access: (
+            |p| {
+                Value::Choice(match p.hex_orientation {
+                    HexOrientation::Pointy => "pointy",
+                    HexOrientation::Flat => "flat",
+                })
+            },
+            |p, v| {
+                if let Value::Choice(name) = v {
+                    p.hex_orientation = if name == "flat" {
+                        HexOrientation::Flat
+                    } else {
+                        HexOrientation::Pointy
+                    }
+                }
+            },
+        ),
+    },
+    Parameter {
         name: "shifts",
         kind: Kind::PairList { min: 1, max: 16 },
         optional: false,
@@ -634,7 +720,8 @@ pub static PARAMETERS: &[Parameter] = &[
         advanced: true,
         summary: "Lattice origin shifts",
         help: "Shifts x:y of the lattice's origin (x right, y down), as fractions of a cell: one \
-             candidate layout each (Strategy 2).",
+             candidate layout each (Strategy 2). For hexagons, along the lattice's own axes: x \
+             along a row (pointy) or column (flat), y along the next row's (column's) offset.",
         access: accessors!(shifts, Pairs),
     },
     Parameter {

@@ -16,7 +16,7 @@
 //! copied.
 
 use super::grid::{Lattice, LatticeCell};
-use super::tiling::{Position, Square};
+use super::tiling::{Position, Tiling};
 use super::Params;
 use super::Tick;
 use geo::Coord;
@@ -76,7 +76,7 @@ pub fn refine(
         let positions: Vec<Position> = (at.iter())
             .map(|&k| (layout.lattice.cells[k].col, layout.lattice.cells[k].row))
             .collect();
-        let shape = super::metrics::LayoutShape::of(&positions);
+        let shape = super::metrics::LayoutShape::of(&positions, layout.lattice.tiling);
         shape.pieces() + shape.holes() as usize
     };
     let (before, after) = (defects(cells), defects(&best));
@@ -186,6 +186,7 @@ fn anneal(
 /// direction error and a misdirection. Landmass blocks are placed by it too
 /// ([`super::landmass::settle`]).
 pub(crate) struct PairWeights {
+    tiling: Tiling,
     adjacent: f64,
     angle: f64,
     misdirected: f64,
@@ -194,6 +195,7 @@ pub(crate) struct PairWeights {
 impl PairWeights {
     pub(crate) fn of(params: &Params) -> PairWeights {
         PairWeights {
+            tiling: Tiling::of(params),
             adjacent: params.refine_w_adjacent,
             angle: params.refine_w_angle,
             misdirected: params.refine_w_misdirected,
@@ -203,15 +205,25 @@ impl PairWeights {
     /// The energy of an adjacent pair whose original direction is `direction` and whose cells
     /// are at `from` and `to`. Both orders of the pair give the same value.
     pub(crate) fn energy(&self, direction: Coord<f64>, from: Position, to: Position) -> f64 {
-        let (cols, rows) = (to.0 - from.0, to.1 - from.1);
-        // Rows grow downwards, y upwards.
-        let (x, y) = (f64::from(cols), -f64::from(rows));
+        let (dc, dr) = (to.0 - from.0, to.1 - from.1);
+        // Squares spelled out: this runs for every pair of every proposal.
+        let (x, y, touching) = match self.tiling {
+            Tiling::Square => (
+                f64::from(dc),
+                -f64::from(dr),
+                (dc, dr) != (0, 0) && dc.abs() <= 1 && dr.abs() <= 1,
+            ),
+            tiling => {
+                let c = tiling.centre_offset((dc, dr));
+                (c.x, c.y, tiling.touching(from, to))
+            }
+        };
         let cross = direction.x * y - direction.y * x;
         let dot = direction.x * x + direction.y * y;
         // In [0°, 180°]; 0 when the original centroids coincide.
         let angle = unsigned_angle(cross.abs(), dot).to_degrees();
         let mut energy = self.angle * angle / 90.0;
-        if !Square.touching(from, to) {
+        if !touching {
             energy += self.adjacent;
         }
         if angle > 45.0 {
@@ -257,6 +269,10 @@ impl<'a> Problem<'a> {
         self.layout.lattice.cells[index]
     }
 
+    fn tiling(&self) -> Tiling {
+        self.layout.lattice.tiling
+    }
+
     /// The energy of an adjacent pair whose original direction is `direction` and whose cells
     /// are `from` and `to`.
     fn pair(&self, direction: Coord<f64>, from: LatticeCell, to: LatticeCell) -> f64 {
@@ -297,11 +313,11 @@ impl<'a> Problem<'a> {
             .map(|&k| (self.cell(k).col, self.cell(k).row))
             .collect();
         let empty_sides: std::collections::HashSet<Position> = (occupied.iter())
-            .flat_map(|&p| Square.edge_neighbours(p))
+            .flat_map(|&p| self.tiling().edge_neighbours(p).to_vec())
             .filter(|p| !occupied.contains(p))
             .collect();
         let notches = (empty_sides.iter())
-            .filter(|&&p| is_notch(p, |q| occupied.contains(&q)))
+            .filter(|&&p| is_notch(self.tiling(), p, |q| occupied.contains(&q)))
             .count();
         pairs + placements + self.w_notch * notches as f64
     }
@@ -320,7 +336,7 @@ impl<'a> Problem<'a> {
                 for &k in [cells[0], cells[cells.len() - 1]].iter() {
                     let p = (self.cell(k).col, self.cell(k).row);
                     around.push(p);
-                    around.extend(Square.edge_neighbours(p));
+                    around.extend(self.tiling().edge_neighbours(p).iter());
                 }
                 around.sort_unstable();
                 around.dedup();
@@ -349,7 +365,7 @@ impl<'a> Problem<'a> {
             }
         }
         let notches = (scope.around.iter())
-            .filter(|&&p| !board.occupied(p) && is_notch(p, |q| board.occupied(q)))
+            .filter(|&&p| !board.occupied(p) && is_notch(self.tiling(), p, |q| board.occupied(q)))
             .count();
         energy + self.w_notch * notches as f64
     }
@@ -362,8 +378,8 @@ struct Scope {
 }
 
 /// Whether the empty position `p` is a notch: at most one of its sides free (method.md §8).
-fn is_notch(p: Position, occupied: impl Fn(Position) -> bool) -> bool {
-    let sides = Square.edge_neighbours(p);
+fn is_notch(tiling: Tiling, p: Position, occupied: impl Fn(Position) -> bool) -> bool {
+    let sides = tiling.edge_neighbours(p);
     sides.iter().filter(|&&q| occupied(q)).count() + 1 >= sides.len()
 }
 
@@ -486,9 +502,10 @@ impl<'a> Board<'a> {
     /// lone cell may leave: a piece fewer), and taking `to` (with `from` given up) must join no
     /// two groups and close off no empty space, or fill a one-cell hole (a hole fewer).
     fn keeps_topology(&self, from: Position, to: Position) -> bool {
-        let before = Square.around(from, |p| self.occupied(p));
+        let tiling = self.lattice.tiling;
+        let before = tiling.around(from, |p| self.occupied(p));
         let leaves = before.cells <= 1 && before.empty >= 1;
-        let after = Square.around(to, |p| p != from && self.occupied(p));
+        let after = tiling.around(to, |p| p != from && self.occupied(p));
         let arrives = after.cells == 1 && after.empty <= 1;
         leaves && arrives
     }
@@ -504,7 +521,8 @@ impl<'a> Board<'a> {
         let region = rng.random_range(0..self.at.len());
         let here = self.lattice.cells[self.at[region]];
         if may_move && rng.random_bool(PUSHES) {
-            return self.push(problem, region, rng.random_range(0..4));
+            let sides = self.lattice.tiling.sides().len();
+            return self.push(problem, region, rng.random_range(0..sides));
         }
         let neighbours = &problem.neighbours[region];
         let (col, row) = if !neighbours.is_empty() && rng.random_bool(0.5) {
@@ -512,13 +530,13 @@ impl<'a> Board<'a> {
             let there = self.lattice.cells[self.at[other]];
             if rng.random_bool(0.5) {
                 // The position beside the neighbour in the direction the region lies from it.
-                let (dc, dr) = nearest_step(-direction);
+                let (dc, dr) = self.lattice.tiling.step_towards(-direction);
                 (there.col + dc, there.row + dr)
             } else {
-                offset(rng, there, 1)
+                offset(rng, self.lattice.tiling, there, 1)
             }
         } else {
-            offset(rng, here, 2)
+            offset(rng, self.lattice.tiling, here, 2)
         };
         let slot = self.slot((col, row))?;
         let part_of = problem.layout.part_of;
@@ -529,7 +547,7 @@ impl<'a> Board<'a> {
             Some(_) => None,
             None => {
                 let index = slot.cell.filter(|&index| index < self.pool)?;
-                let near = (col - here.col).abs().max((row - here.row).abs()) <= 2;
+                let near = (self.lattice.tiling).distance((col, row), (here.col, here.row)) <= 2;
                 let own = self.lattice.cells[index].part == part_of[region];
                 (may_move && near && own && self.keeps_topology((here.col, here.row), (col, row)))
                     .then_some(Move::Chain(Chain::new(&[self.at[region], index])))
@@ -546,7 +564,7 @@ impl<'a> Board<'a> {
         let mut cells = vec![self.at[region]];
         let mut p = (start.col, start.row);
         for _ in 0..LONGEST_CHAIN {
-            p = Square.edge_neighbours(p)[direction];
+            p = self.lattice.tiling.edge_neighbours(p)[direction];
             let slot = self.slot(p)?;
             let index = slot.cell?;
             match slot.region {
@@ -590,26 +608,22 @@ impl<'a> Board<'a> {
     }
 }
 
-/// The step to one of the eight surrounding positions nearest in direction to `direction`
-/// (y up; rows grow downwards).
-fn nearest_step(direction: Coord<f64>) -> (i32, i32) {
-    let octant = (direction.y.atan2(direction.x) / std::f64::consts::FRAC_PI_4).round() as i32;
-    let (dc, dy) = [
-        (1, 0),
-        (1, 1),
-        (0, 1),
-        (-1, 1),
-        (-1, 0),
-        (-1, -1),
-        (0, -1),
-        (1, -1),
-    ][octant.rem_euclid(8) as usize];
-    (dc, -dy)
-}
-
-/// A position drawn uniformly among those within Chebyshev distance `reach` of `around`,
-/// `around` itself excluded.
-fn offset(rng: &mut ChaCha8Rng, around: LatticeCell, reach: i32) -> Position {
+/// A position drawn uniformly among those within `reach` steps of `around` (Chebyshev
+/// distance for squares, hexagonal distance for hexagons), `around` itself excluded.
+fn offset(rng: &mut ChaCha8Rng, tiling: Tiling, around: LatticeCell, reach: i32) -> Position {
+    if tiling != Tiling::Square {
+        // Axial offsets within the square of side 2·reach + 1 that lie within `reach` steps:
+        // drawn from that square until one does (3·reach·(reach + 1) of its cells).
+        loop {
+            let d = (
+                rng.random_range(-reach..=reach),
+                rng.random_range(-reach..=reach),
+            );
+            if d != (0, 0) && tiling.distance(d, (0, 0)) <= reach {
+                return (around.col + d.0, around.row + d.1);
+            }
+        }
+    }
     let side = 2 * reach + 1;
     let centre = side * side / 2;
     let mut k = rng.random_range(0..side * side - 1);
@@ -649,6 +663,7 @@ mod tests {
             }
         }
         Lattice {
+            tiling: Tiling::Square,
             cell_size: 1.0,
             origin: Coord {
                 x: 0.0,
@@ -728,7 +743,7 @@ mod tests {
             .iter()
             .map(|&k| (lattice.cells[k].col, lattice.cells[k].row))
             .collect();
-        let shape = crate::core::metrics::LayoutShape::of(&cells);
+        let shape = crate::core::metrics::LayoutShape::of(&cells, Tiling::Square);
         (shape.pieces(), shape.holes())
     }
 

@@ -3,12 +3,15 @@
 
 use super::candidates::Input;
 use super::metrics::{self, Scored};
+use super::params::HexOrientation;
+use super::tiling::Tiling;
 use super::{Error, LayoutMetrics, Params, Region, RegionMetrics};
-use geo::{Area, Centroid, Polygon};
+use geo::{Area, Centroid, Coord, Polygon};
 
-/// Scores `cells` (one square per region, `cells[i]` belonging to `regions[i]`, same planar CRS)
-/// against the regions. Columns and rows are recovered from the cell centres and the mean cell
-/// side. Per-region metrics come back in the input order.
+/// Scores `cells` (one square or hexagon per region, `cells[i]` belonging to `regions[i]`, same
+/// planar CRS) against the regions. The tiling is told by the cells' corners (see
+/// [`tiling_of`]); positions are recovered from the cell centres and the median cell area.
+/// Per-region metrics come back in the input order.
 pub fn score(
     regions: &[Region],
     cells: &[Polygon<f64>],
@@ -38,25 +41,18 @@ pub fn score(
         areas[middle]
     };
     let side = median.sqrt();
-    let left = centres.iter().map(|c| c.x).fold(f64::INFINITY, f64::min);
-    let top = centres
-        .iter()
-        .map(|c| c.y)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let tiling = tiling_of(&cells[input.order[0]]);
+    let first = centres[0];
     let col_rows: Vec<(i32, i32)> = centres
         .iter()
-        .map(|c| {
-            (
-                ((c.x - left) / side).round() as i32,
-                ((top - c.y) / side).round() as i32,
-            )
-        })
+        .map(|&c| tiling.position_at((c - first) / side))
         .collect();
     let reference = metrics::Reference::new(&input.prepared, input.frame);
     let (layout, sorted_metrics) = metrics::evaluate(&Scored {
         reference: &reference,
         // No Snake ran: the paper's variant measures from the centroids themselves.
         moved: &reference.centroids,
+        tiling,
         cells: &col_rows,
         centres: &centres,
         cell_size: side,
@@ -66,4 +62,30 @@ pub fn score(
         per_region[i] = sorted_metrics[k];
     }
     Ok((layout, per_region))
+}
+
+/// The tiling a cell belongs to: a hexagon has six corners, pointy when one of them is its
+/// highest point alone, flat when its top is an edge; anything else is taken as a square.
+fn tiling_of(cell: &Polygon<f64>) -> Tiling {
+    let mut corners: Vec<Coord<f64>> = cell.exterior().0.clone();
+    corners.dedup();
+    if corners.len() > 1 && corners.first() == corners.last() {
+        corners.pop();
+    }
+    if corners.len() != 6 {
+        return Tiling::Square;
+    }
+    let top = corners
+        .iter()
+        .map(|c| c.y)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let bottom = corners.iter().map(|c| c.y).fold(f64::INFINITY, f64::min);
+    let near_top = (corners.iter())
+        .filter(|c| top - c.y < 1e-6 * (top - bottom))
+        .count();
+    Tiling::Hex(if near_top == 1 {
+        HexOrientation::Pointy
+    } else {
+        HexOrientation::Flat
+    })
 }

@@ -22,7 +22,7 @@ impl Handle for DatasetJob {
 /// The settings snakegrid_job_set() knows, each with the command-line option it mirrors.
 const SETTINGS: &str = "src (SRC), src_layer (SRC_LAYER), where (-where), id_field (-id), \
     dst (DST), format (-f), layer_name (-nln), s_srs (-s_srs), target_srs (-t_srs), \
-    json_report (-json), svg (-svg), label_field (-label), lco (-lco), dsco (-dsco)";
+    json_report (-json), svg (-svg), hexjson (-hexjson), label_field (-label), lco (-lco), dsco (-dsco)";
 
 /// Makes an empty job (no source, no destination, no overwrite, no update) and writes it to
 /// `*out`.
@@ -62,6 +62,8 @@ pub unsafe extern "C" fn snakegrid_job_free(job: *mut DatasetJob) {
 ///   projected, else a Lambert azimuthal equal-area CRS at its centre);
 /// - "json_report": path of a machine-readable report to write;
 /// - "svg": path of a picture of the source and the grid map to write;
+/// - "hexjson": path of the layout as HexJSON to write (hexagonal cells only: parameter cell
+///   hex);
 /// - "label_field": short label field for the picture;
 /// - "lco": one layer creation option of the output driver, NAME=VALUE; each call adds one
 ///   (as -lco does each time it is given), NULL clears them all;
@@ -122,6 +124,7 @@ fn optional_setting<'a>(job: &'a mut Job, name: &str) -> Result<&'a mut Option<S
         "target_srs" => &mut job.target_srs,
         "json_report" => &mut job.json_report,
         "svg" => &mut job.svg,
+        "hexjson" => &mut job.hexjson,
         "label_field" => &mut job.label_field,
         _ => {
             return Err(Failure::new(

@@ -5,7 +5,8 @@
 use super::handle::{self, Handle, Out};
 use super::status::{c_string, guard, guard_free, Failure, Status};
 use crate::core::{
-    CandidateReport, GridMap, LayoutMetrics, RegionCell, RegionMetrics, SnakeReport, StopReason,
+    hexjson, CandidateReport, GridMap, LayoutMetrics, RegionCell, RegionMetrics, SnakeReport,
+    StopReason,
 };
 use std::ffi::{c_char, CString};
 
@@ -23,6 +24,8 @@ pub(crate) struct Output {
     cells_wkb: Vec<Vec<u8>>,
     moved_outline_wkb: Vec<u8>,
     notes: Vec<CString>,
+    /// The HexJSON of a hexagon layout, each hexagon labelled with its id.
+    hexjson: Option<CString>,
 }
 
 impl Output {
@@ -41,6 +44,10 @@ impl Output {
                 .collect(),
             moved_outline_wkb: crate::wkb::from_multi_polygon(&map.moved_outline),
             notes: notes.iter().map(|n| c_string(n)).collect(),
+            hexjson: {
+                let ids: Vec<String> = map.cells.iter().map(|c| c.id.clone()).collect();
+                hexjson::of_map(&map, &ids, Vec::new()).map(|text| c_string(&text))
+            },
             map,
         }
     }
@@ -433,6 +440,30 @@ pub unsafe extern "C" fn snakegrid_result_note(
     unsafe {
         read("snakegrid_result_note", result, out, |o| {
             Ok(at(&o.notes, index, "notes")?.as_ptr())
+        })
+    }
+}
+
+/// The layout as HexJSON (Open Innovations' hexagon map format, as d3-hexjson renders it):
+/// `{"layout": "odd-r" | "even-r" | "odd-q" | "even-q", "hexes": {id: {"q", "r", "n"}}}`, q the
+/// column, r counted from the bottom, n the region's id. The string belongs to the result.
+///
+/// Fails with SNAKEGRID_INVALID_ARGUMENT for a layout of squares (run with the option cell set to
+/// hex).
+///
+/// Thread safety: any number of threads may read one result at once.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_hexjson(
+    result: *const RunResult,
+    out: *mut *const c_char,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_hexjson", result, out, |o| {
+            (o.hexjson.as_ref())
+                .map(|text| text.as_ptr())
+                .ok_or_else(|| Failure::new(Status::INVALID_ARGUMENT, hexjson::NEEDS_HEXAGONS))
         })
     }
 }

@@ -31,7 +31,8 @@ mod write;
 
 pub use report::summary;
 
-use crate::core::{Error, GridMap, Params, Progress, Region};
+use crate::core::params::CellShape;
+use crate::core::{hexjson, Error, GridMap, Params, Progress, Region};
 pub use crate::job::Job;
 use commit::Staged;
 use destination::{Destination, Mode, Plan};
@@ -97,6 +98,9 @@ fn run_in(
             crate::job::check_creation_option(flag, option).map_err(Error::InvalidParameter)?;
         }
     }
+    if job.hexjson.is_some() && params.cell == CellShape::Square {
+        return Err(Error::InvalidParameter(hexjson::NEEDS_HEXAGONS.into()));
+    }
     let driver = write::driver(job.format.as_deref(), &job.dst)?;
     let format = driver.short_name();
     let dataset = read::open(session, &job.src)?;
@@ -149,12 +153,14 @@ fn run_in(
     };
     let json_destination = extra(&job.json_report, "JSON report")?;
     let svg_destination = extra(&job.svg, "picture")?;
+    let hexjson_destination = extra(&job.hexjson, "HexJSON")?;
 
     // Staging folders (after removing those that killed runs left), so that a run that cannot
     // write beside an output fails now rather than after the layout.
     let all = std::iter::once(&destination)
         .chain(&json_destination)
-        .chain(&svg_destination);
+        .chain(&svg_destination)
+        .chain(&hexjson_destination);
     let folders: BTreeSet<PathBuf> = all.map(|d| staging::folder_of(&d.path)).collect();
     let mut notes: Vec<String> = folders.iter().flat_map(|f| staging::sweep(f)).collect();
     let dst_staging = Staging::new(&destination.path, "destination")?;
@@ -164,6 +170,7 @@ fn run_in(
     };
     let json_staging = stage(json_destination, "JSON report")?;
     let svg_staging = stage(svg_destination, "picture")?;
+    let hexjson_staging = stage(hexjson_destination, "HexJSON")?;
 
     step(0.0, "reading")?;
     let Source {
@@ -254,6 +261,12 @@ fn run_in(
     if let Some((svg, staging)) = svg_staging {
         let picture = svg::render(&regions, &labels, &outcome.map);
         staged.push(stage_text("picture", svg, staging, &picture)?);
+    }
+    if let Some((hexjson, staging)) = hexjson_staging {
+        let fields = features.iter().map(hexjson_fields).collect();
+        let text = hexjson::of_map(&outcome.map, &labels, fields)
+            .ok_or_else(|| Error::Internal(hexjson::NEEDS_HEXAGONS.into()))?;
+        staged.push(stage_text("HexJSON", hexjson, staging, &text)?);
     }
 
     // The last chance to cancel; only now does anything appear at, or disappear from, the
@@ -501,7 +514,11 @@ fn stage_text(
 
 /// The outputs a job writes, each with what it is called in messages.
 fn outputs(job: &Job) -> Vec<(&'static str, &str)> {
-    let extras = [("JSON report", &job.json_report), ("picture", &job.svg)];
+    let extras = [
+        ("JSON report", &job.json_report),
+        ("picture", &job.svg),
+        ("HexJSON", &job.hexjson),
+    ];
     std::iter::once(("destination", job.dst.as_str()))
         .chain(
             extras
@@ -527,4 +544,21 @@ fn distinct_outputs(outputs: &[(&str, &str)]) -> Result<(), Error> {
         }
     }
     Ok(())
+}
+
+/// A feature's string and number fields, as HexJSON carries them (it keeps the short strings).
+fn hexjson_fields(feature: &Feature) -> Vec<(String, serde_json::Value)> {
+    use gdal::vector::FieldValue;
+    (feature.fields())
+        .filter_map(|(name, value)| {
+            let value = match value? {
+                FieldValue::StringValue(s) => serde_json::Value::from(s),
+                FieldValue::IntegerValue(v) => v.into(),
+                FieldValue::Integer64Value(v) => v.into(),
+                FieldValue::RealValue(v) => serde_json::Number::from_f64(v)?.into(),
+                _ => return None,
+            };
+            Some((name, value))
+        })
+        .collect()
 }

@@ -2,7 +2,9 @@
 //! layer metadata of the output, and the printed summary.
 
 use super::{Job, Outcome};
-use crate::core::{CandidateReport, Error, GridMap, LayoutMetrics, Params, SnakeReport};
+use crate::core::{
+    CandidateReport, CellLayout, Error, GridMap, LayoutMetrics, Params, SnakeReport,
+};
 use geo::{BoundingRect, Coord};
 use serde::Serialize;
 
@@ -19,6 +21,8 @@ struct Report<'a> {
     parameters: &'a Params,
     /// Side of a cell in working CRS units.
     cell_size: f64,
+    /// Squares or hexagons, and for hexagons which rows or columns are offset.
+    cells: CellLayout,
     adjacent_pairs: usize,
     metrics: &'a LayoutMetrics,
     snake: &'a SnakeReport,
@@ -98,6 +102,7 @@ pub(crate) fn json(
         notes: &outcome.notes,
         parameters: params,
         cell_size: map.cell_size,
+        cells: map.cell_layout(),
         adjacent_pairs: map.adjacency.len(),
         metrics: &map.metrics,
         snake: &map.snake,
@@ -158,6 +163,15 @@ pub(crate) fn metadata(
         items.push(("SNAKEGRID_WHERE".to_owned(), expression.clone()));
     }
     items.push(("SNAKEGRID_CELL_SIZE".to_owned(), map.cell_size.to_string()));
+    let cells = map.cell_layout();
+    items.push(("SNAKEGRID_CELL".to_owned(), cells.shape.to_owned()));
+    if let (Some(orientation), Some(offset)) = (cells.orientation, cells.offset) {
+        items.push((
+            "SNAKEGRID_HEX_ORIENTATION".to_owned(),
+            orientation.to_owned(),
+        ));
+        items.push(("SNAKEGRID_HEX_OFFSET".to_owned(), offset));
+    }
     // Every metric by its own name, so new metrics appear without touching this list.
     if let Ok(serde_json::Value::Object(metrics)) = serde_json::to_value(map.metrics) {
         for (name, value) in metrics {
@@ -218,6 +232,11 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
         outcome.format,
         round_to(map.cell_size, 1),
     );
+    let cells = map.cell_layout();
+    if let (Some(orientation), Some(offset)) = (cells.orientation, cells.offset) {
+        text +=
+            &format!("cells: {orientation} hexagons of that area (grid_col/grid_row: {offset})\n");
+    }
     text += &format!(
         "metrics: C_adjacent {:.3} (rook {:.3}, false neighbours {:.3}), C_orientation {:.1}° \
          (misdirected {:.3}), C_location {:.3} cells (p90 {:.2}, max {:.2}; unfitted {}, from \

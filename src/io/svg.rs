@@ -46,7 +46,7 @@ pub(crate) fn render(regions: &[Region], labels: &[String], map: &GridMap) -> St
         svg,
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width:.0}\" height=\"{total_height:.0}\" \
          viewBox=\"0 0 {width:.0} {total_height:.0}\" font-family=\"sans-serif\">\n\
-         <style>path{{stroke:#fff;stroke-width:0.5;fill-rule:evenodd}}rect{{stroke:#fff;stroke-width:1}}\
+         <style>path{{stroke:#fff;stroke-width:0.5;fill-rule:evenodd}}polygon{{stroke:#fff;stroke-width:1}}\
          text{{text-anchor:middle;dominant-baseline:central;fill:#222}}</style>\n\
          <rect x=\"0\" y=\"0\" width=\"{width:.0}\" height=\"{total_height:.0}\" fill=\"#fff\" stroke=\"none\"/>"
     );
@@ -103,17 +103,20 @@ pub(crate) fn render(regions: &[Region], labels: &[String], map: &GridMap) -> St
         let Some(rect) = cell.cell.bounding_rect() else {
             continue;
         };
-        let corner = grid_view.px(Coord {
-            x: rect.min().x,
-            y: rect.max().y,
-        });
+        // The cell's own corners (a square or a hexagon), the closing one left out.
+        let exterior = &cell.cell.exterior().0;
+        let points: Vec<String> = (exterior[..exterior.len().saturating_sub(1)].iter())
+            .map(|&c| {
+                let p = grid_view.px(c);
+                format!("{:.1},{:.1}", p.x, p.y)
+            })
+            .collect();
         let centre = grid_view.px(rect.center());
         let _ = writeln!(
             svg,
-            "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{side:.1}\" height=\"{side:.1}\" fill=\"{colour}\"/>\
+            "<polygon points=\"{}\" fill=\"{colour}\"/>\
              <text x=\"{:.1}\" y=\"{:.1}\" font-size=\"{font:.1}\">{}</text>",
-            corner.x,
-            corner.y,
+            points.join(" "),
             centre.x,
             centre.y,
             escape(&fit(&xml_safe(label), room))

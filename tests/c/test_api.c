@@ -179,6 +179,7 @@ static void test_null_arguments(void) {
     CHECK_FAILS(snakegrid_result_candidate(NULL, 0, &candidate), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_result_note_count(NULL, &count), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_result_note(NULL, 0, &text), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_hexjson(NULL, &text), SNAKEGRID_NULL_ARGUMENT);
     CHECK(count == 7 && size == 7.0 && strcmp(text, "untouched") == 0 && bytes == &byte);
     CHECK(col == 7 && row == 7);
 
@@ -187,7 +188,7 @@ static void test_null_arguments(void) {
     snakegrid_regions_free(NULL);
     snakegrid_job_free(NULL);
     snakegrid_result_free(NULL);
-    CHECK_MESSAGE_HAS("snakegrid_result_note");
+    CHECK_MESSAGE_HAS("snakegrid_result_hexjson");
 
     /* A successful call clears the message. */
     CHECK_OK(snakegrid_options_set(options, "alpha", "1"));
@@ -581,6 +582,44 @@ static void test_run(void) {
     snakegrid_options_free(options);
 }
 
+/* Hexagons through the in-memory API: six-cornered cells, their HexJSON with one hexagon per
+ * region keyed by its id, and a refusal naming the way out for squares. */
+static void test_hexagons(void) {
+    snakegrid_options *options = make_options();
+    CHECK_OK(snakegrid_options_set(options, "cell", "hex"));
+    CHECK_OK(snakegrid_options_set(options, "hex_orientation", "flat"));
+    snakegrid_regions *regions = make_regions();
+    snakegrid_result *result = NULL;
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
+    if (result != NULL) {
+        const uint8_t *bytes = NULL;
+        size_t len = 0;
+        CHECK_OK(snakegrid_result_cell_wkb(result, 0, &bytes, &len));
+        /* A polygon of one ring of 7 points (the first repeated): 9 + 4 + 7 * 16 bytes. */
+        CHECK(len == 9 + 4 + 7 * 16 && get_u32_le(bytes + 5) == 1 && get_u32_le(bytes + 9) == 7);
+        const char *text = NULL;
+        CHECK_OK(snakegrid_result_hexjson(result, &text));
+        CHECK(text != NULL && (strstr(text, "\"odd-q\"") || strstr(text, "\"even-q\"")));
+        for (int k = 0; text != NULL && k < REGIONS; k++) {
+            char key[32];
+            snprintf(key, sizeof key, "\"r%d%d\": {\"q\": ", k % COLS, k / COLS);
+            CHECK(strstr(text, key) != NULL);
+        }
+        snakegrid_result_free(result);
+    }
+    snakegrid_options_free(options);
+
+    snakegrid_options *squares = make_options();
+    CHECK_OK(snakegrid_run(regions, squares, NULL, NULL, &result));
+    const char *untouched = "untouched";
+    CHECK_FAILS(snakegrid_result_hexjson(result, &untouched), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("cell hex");
+    CHECK(strcmp(untouched, "untouched") == 0);
+    snakegrid_result_free(result);
+    snakegrid_options_free(squares);
+    snakegrid_regions_free(regions);
+}
+
 static void test_cancel(void) {
     snakegrid_options *options = make_options();
     snakegrid_regions *regions = make_regions();
@@ -723,6 +762,7 @@ int main(void) {
     test_bad_regions();
     test_invalid_input_runs();
     test_run();
+    test_hexagons();
     test_cancel();
     test_score();
     test_threads();

@@ -6,8 +6,9 @@
 #[cfg(feature = "gdal")]
 pub mod cli;
 
-use geo::Area;
-use snakegrid::{generate, GridMap, Params, Region, RegionCell};
+use geo::{Area, Centroid};
+use snakegrid::tiling::Tiling;
+use snakegrid::{generate, GridMap, HexOrientation, Params, Region, RegionCell};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
@@ -75,22 +76,25 @@ pub fn assert_valid_grid(regions: &[Region], map: &GridMap) {
     assert_eq!(places.len(), regions.len(), "every region has its own cell");
     assert!(map.cell_size.is_finite() && map.cell_size > 0.0);
     let area = map.cell_size * map.cell_size;
+    // A square closes with its 5th point, a hexagon with its 7th.
+    let points = if map.tiling == Tiling::Square { 5 } else { 7 };
     for cell in &map.cells {
         assert!(
             (cell.cell.unsigned_area() - area).abs() < 1e-6 * area,
-            "cell {} is a full square",
+            "cell {} is a full cell",
             cell.id
         );
-        assert_eq!(cell.cell.exterior().0.len(), 5);
+        assert_eq!(cell.cell.exterior().0.len(), points);
     }
+    // Every cell's centre sits where its column and row say, relative to the first one's: the
+    // cells are distinct positions of one lattice, so they do not overlap.
     let first = &map.cells[0];
-    let origin = first.cell.exterior().0[0];
+    let centre = |c: &RegionCell| c.cell.centroid().unwrap().0;
     for cell in &map.cells {
-        let corner = cell.cell.exterior().0[0];
-        let dx = (corner.x - origin.x) / map.cell_size - f64::from(cell.col - first.col);
-        let dy = (origin.y - corner.y) / map.cell_size - f64::from(cell.row - first.row);
+        let d = (centre(cell) - centre(first)) / map.cell_size;
+        let e = lattice_offset(map, cell) - lattice_offset(map, first);
         assert!(
-            dx.abs() < 1e-6 && dy.abs() < 1e-6,
+            (d.x - e.x).abs() < 1e-6 && (d.y - e.y).abs() < 1e-6,
             "cell {} sits on the lattice",
             cell.id
         );
@@ -117,6 +121,33 @@ pub fn assert_valid_grid(regions: &[Region], map: &GridMap) {
             "region {} has finite metrics",
             cell.id
         );
+    }
+}
+
+/// Where the centre of `cell` lies in cells (y up) from that of column 0, row 0, as its
+/// column and row say: squares one cell apart; hexagons of area 1 with every other row (pointy)
+/// or column (flat) offset half a cell as `map.shifted` says (method.md §10).
+pub fn lattice_offset(map: &GridMap, cell: &RegionCell) -> geo::Coord<f64> {
+    let (c, r) = (f64::from(cell.col), f64::from(cell.row));
+    let side = (2.0 / (3.0 * 3f64.sqrt())).sqrt();
+    let width = 3f64.sqrt() * side;
+    let half = |i: i32| {
+        if Some(i.rem_euclid(2)) == map.shifted {
+            0.5
+        } else {
+            0.0
+        }
+    };
+    match map.tiling {
+        Tiling::Square => geo::Coord { x: c, y: -r },
+        Tiling::Hex(HexOrientation::Pointy) => geo::Coord {
+            x: width * (c + half(cell.row)),
+            y: -1.5 * side * r,
+        },
+        Tiling::Hex(HexOrientation::Flat) => geo::Coord {
+            x: 1.5 * side * c,
+            y: -width * (r + half(cell.col)),
+        },
     }
 }
 

@@ -13,6 +13,7 @@ from qgis.core import (
     QgsProcessingParameterFeatureSink,
     QgsProcessingParameterFeatureSource,
     QgsProcessingParameterField,
+    QgsProcessingParameterFileDestination,
     QgsVectorLayerSimpleLabeling,
     QgsWkbTypes,
 )
@@ -21,11 +22,11 @@ from qgis.PyQt.QtCore import QVariant
 from .. import library
 from . import common, parameters
 
-INPUT, ID_FIELD, LABEL_FIELD, TARGET_CRS, OUTPUT, OUTLINE = (
-    "INPUT", "ID_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT", "OUTLINE")
+INPUT, ID_FIELD, LABEL_FIELD, TARGET_CRS, OUTPUT, OUTLINE, HEXJSON = (
+    "INPUT", "ID_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT", "OUTLINE", "HEXJSON")
 
 ABOUT = """\
-Makes a grid map (tile map): one equal square cell per region, placed so that cells stay near \
+Makes a grid map (tile map): one equal cell per region (squares, or hexagons with cell = hex), placed so that cells stay near \
 their regions, neighbours stay neighbours, directions hold and the whole keeps the map's outline.
 The method (the snake model of Wei, Yang, Xu and Ding, 2024): the region centroids and the map \
 outline form a network of elastic beams; forces pull the centroids towards an even spacing of \
@@ -40,6 +41,8 @@ TARGET_CRS: the working and output CRS, as the command line's -t_srs (default: t
 when it is projected, else an equal-area CRS centred on the layer, chosen by the library).
 OUTPUT: one square per region with every source field and {fields}.
 OUTLINE (optional): the map outline after the Snake, which the lattice was fitted to.
+HEXJSON (optional, hexagonal cells only): the layout as a HexJSON file (Open Innovations' \
+format, as d3-hexjson draws it), each hexagon keyed and labelled by its region id.
 Numeric outputs, the layout metrics: {metrics}.
 Method parameters (lengths in cells):
 {parameters}"""
@@ -123,6 +126,9 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
         self.addParameter(QgsProcessingParameterFeatureSink(
             OUTLINE, "Moved outline", QgsProcessing.TypeVectorPolygon, optional=True,
             createByDefault=False))
+        self.addParameter(QgsProcessingParameterFileDestination(
+            HEXJSON, "HexJSON file (hexagonal cells only)", "HexJSON (*.hexjson *.json)",
+            optional=True, createByDefault=False))
         common.add_layout_outputs(self)
 
     def checkParameterValues(self, parameters_, context):  # noqa: N802
@@ -131,11 +137,14 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
         if ok and self.options:
             import snakegrid
 
+            values = parameters.values(self, self.options, parameters_, context)
             try:
-                snakegrid.check_options(
-                    **parameters.values(self, self.options, parameters_, context))
+                snakegrid.check_options(**values)
             except snakegrid.SnakegridError as e:
                 return False, str(e)
+            if self.parameterAsFileOutput(parameters_, HEXJSON, context) and \
+                    values.get("cell", "square") != "hex":
+                return False, "A HexJSON file describes hexagons: set Cell shape to hex"
         return ok, message
 
     def process(self, sg, parameters_, context, feedback):
@@ -182,6 +191,15 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
                 raise QgsProcessingException(
                     self.writeFeatureError(outline_sink, parameters_, OUTLINE))
             results[OUTLINE] = outline_id
+
+        hexjson = self.parameterAsFileOutput(parameters_, HEXJSON, context)
+        if hexjson:
+            if grid.hexjson is None:
+                raise QgsProcessingException("A HexJSON file describes hexagons: set Cell "
+                                             "shape to hex")
+            with open(hexjson, "w", encoding="utf-8") as out:
+                out.write(grid.hexjson)
+            results[HEXJSON] = hexjson
 
         label = label_field or next(
             (name for name in ("abbr", "name") if features.fields.lookupField(name) >= 0), "")
