@@ -71,9 +71,11 @@ fn source_fields(layer: &str) -> Vec<String> {
     layer.defn().fields().map(|f| f.name()).collect()
 }
 
-const ADDED: [&str; 5] = [
+const ADDED: [&str; 7] = [
     "grid_col",
     "grid_row",
+    "grid_q",
+    "grid_r",
     "cell_disp",
     "nbr_kept",
     "orient_err",
@@ -889,6 +891,33 @@ fn hexagons_come_with_a_hexjson_file_that_numbers_them_like_the_layer() {
             assert!(offset.contains(if pointy { "rows right" } else { "columns down" }));
         }
         assert!(pairs > 10, "{pairs} pairs");
+        // grid_q and grid_r are axial: two hexagons are neighbours (centres one width apart)
+        // exactly when their axial coordinates differ by one of the six steps.
+        let axial: Vec<((i64, i64), (f64, f64))> = (rows.iter())
+            .map(|row| {
+                let int = |name: &str| row.fields[name].parse::<i64>().unwrap();
+                ((int("grid_q"), int("grid_r")), centre(row))
+            })
+            .collect();
+        let width = {
+            let (a, b) = (axial[0].1, axial[1].1);
+            let d = |p: &(f64, f64)| (p.0 - a.0).hypot(p.1 - a.1);
+            axial[1..]
+                .iter()
+                .map(|x| d(&x.1))
+                .fold(f64::MAX, f64::min)
+                .min(d(&b))
+        };
+        let steps = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, -1), (-1, 1)];
+        let mut neighbours = 0;
+        for (i, &((q, r), a)) in axial.iter().enumerate() {
+            for &((q2, r2), b) in &axial[i + 1..] {
+                let close = (a.0 - b.0).hypot(a.1 - b.1) < 1.2 * width;
+                neighbours += usize::from(close);
+                assert_eq!(close, steps.contains(&(q2 - q, r2 - r)), "{orientation}");
+            }
+        }
+        assert!(neighbours > 60, "{neighbours} neighbouring pairs");
         let cells: HashMap<String, (i64, i64)> = (rows.iter())
             .map(|row| {
                 let int = |name: &str| row.fields[name].parse::<i64>().unwrap();

@@ -930,6 +930,8 @@ fn computed_fields_keep_their_names_and_colliding_source_fields_are_renamed() {
             [
                 "grid_col",
                 "grid_row",
+                "grid_q",
+                "grid_r",
                 "cell_disp",
                 "nbr_kept",
                 "orient_err",

@@ -172,6 +172,8 @@ fn every_source_field_keeps_its_name_type_subtype_and_value() {
             "src_grid_col",
             "grid_col",
             "grid_row",
+            "grid_q",
+            "grid_r",
             "cell_disp",
             "nbr_kept",
             "orient_err"

@@ -728,6 +728,8 @@ impl Context<'_> {
             .collect();
         let col0 = used.iter().map(|c| c.0).min().unwrap_or(0);
         let row0 = used.iter().map(|c| c.1).min().unwrap_or(0);
+        // Axial positions from the one at offset column 0, row 0.
+        let reference = lattice.tiling.from_offset_coordinates((col0, row0));
         let mut cells: Vec<Option<RegionCell>> = vec![None; regions.len()];
         for (k, &input) in order.iter().enumerate() {
             let (col, row) = used[k];
@@ -736,6 +738,8 @@ impl Context<'_> {
                 id: regions[input].id.clone(),
                 col: col - col0,
                 row: row - row0,
+                q: positions[k].0 - reference.0,
+                r: positions[k].1 - reference.1,
                 cell: geo::MapCoords::map_coords(&square, |c| f.to_map(c)),
                 centroid: f.to_map(self.prepared.centroids[k]),
                 moved_centroid: f.to_map(run.positions[k]),

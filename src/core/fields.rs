@@ -36,6 +36,20 @@ pub static OUTPUT_FIELDS: &[OutputField] = &[
         value: |c| f64::from(c.row),
     },
     OutputField {
+        name: "grid_q",
+        integer: true,
+        description: "axial q of the region's hexagon, from the cell at grid_col 0, grid_row 0: \
+                      along a row (pointy) or a column (flat); for squares, grid_col",
+        value: |c| f64::from(c.q),
+    },
+    OutputField {
+        name: "grid_r",
+        integer: true,
+        description: "axial r of the region's hexagon: the next row (pointy) or column (flat) \
+                      down, half a cell over, is r + 1; for squares, grid_row",
+        value: |c| f64::from(c.r),
+    },
+    OutputField {
         name: "cell_disp",
         integer: false,
         description: "distance from the region's centroid to its cell's centre, in cells, after \

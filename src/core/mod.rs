@@ -209,6 +209,12 @@ pub struct RegionCell {
     pub col: i32,
     /// Row from the top (0 = topmost used row).
     pub row: i32,
+    /// Axial coordinates of a hexagon, from the cell at column 0, row 0 (which may be unused):
+    /// q along a row (pointy) or a column (flat), r down to the next row (column); every
+    /// neighbour is (q ± 1, r), (q, r ± 1), (q + 1, r − 1) or (q − 1, r + 1). For squares the
+    /// column and the row.
+    pub q: i32,
+    pub r: i32,
     /// The square or hexagon, in map units.
     pub cell: Polygon<f64>,
     /// The region's centroid (§1), map units.

@@ -288,6 +288,15 @@ impl Tiling {
         }
     }
 
+    /// The position whose [`Tiling::offset_coordinates`] are `(col, row)`: their inverse.
+    pub fn from_offset_coordinates(self, (col, row): Position) -> Position {
+        match self {
+            Tiling::Square => (col, row),
+            Tiling::Hex(HexOrientation::Pointy) => (col - row.div_euclid(2), row),
+            Tiling::Hex(HexOrientation::Flat) => (col, row - col.div_euclid(2)),
+        }
+    }
+
     /// The offset column and row of `p`: for squares `p` itself; for pointy hexagons the rows
     /// are `r` and the odd ones sit half a cell to the right; for flat hexagons the columns are
     /// `q` and the odd ones sit half a cell lower.
@@ -451,6 +460,15 @@ mod tests {
         // Offset rows: (q, r) = (0, 1) is below (0, 0) and half a cell to its right.
         assert_eq!(hex.offset_coordinates((0, 1)), (0, 1));
         assert_eq!(hex.offset_coordinates((-1, 2)), (0, 2));
+        for t in [hex, Tiling::Hex(HexOrientation::Flat), Tiling::Square] {
+            for p in [(0, 0), (3, -5), (-4, 7), (-3, -3)] {
+                assert_eq!(
+                    t.from_offset_coordinates(t.offset_coordinates(p)),
+                    p,
+                    "{t:?}"
+                );
+            }
+        }
         assert_eq!(
             Tiling::Hex(HexOrientation::Flat).offset_coordinates((1, -1)),
             (1, -1)

@@ -338,6 +338,10 @@ static void test_fields(void) {
     CHECK(strcmp(field.name, "grid_col") == 0 && field.integer && field.description[0] != '\0');
     CHECK_OK(snakegrid_field_info(1, &field));
     CHECK(strcmp(field.name, "grid_row") == 0 && field.integer);
+    CHECK_OK(snakegrid_field_info(2, &field));
+    CHECK(strcmp(field.name, "grid_q") == 0 && field.integer);
+    CHECK_OK(snakegrid_field_info(3, &field));
+    CHECK(strcmp(field.name, "grid_r") == 0 && field.integer);
     CHECK_FAILS(snakegrid_field_info(count, &field), SNAKEGRID_INVALID_ARGUMENT);
 
     snakegrid_options *options = make_options();
@@ -353,7 +357,12 @@ static void test_fields(void) {
         CHECK_OK(snakegrid_result_field(result, i, 1, &value_row));
         CHECK(value_col == col && value_row == row);
         CHECK_OK(snakegrid_result_region_metrics(result, i, &metrics));
-        CHECK_OK(snakegrid_result_field(result, i, 2, &displacement));
+        /* For squares the axial coordinates are the column and the row. */
+        double q = -2, r = -2;
+        CHECK_OK(snakegrid_result_field(result, i, 2, &q));
+        CHECK_OK(snakegrid_result_field(result, i, 3, &r));
+        CHECK(q == col && r == row);
+        CHECK_OK(snakegrid_result_field(result, i, 4, &displacement));
         CHECK(displacement == metrics.displacement);
     }
     double unused = 0;
