@@ -211,7 +211,7 @@ fn nearest_free(
         // at most two doublings past the first that held enough positions (and past 4(k + 1)
         // for a small landmass): a landmass ringed by islands has no own side farther out,
         // and a search to the lattice's ends would take minutes.
-        let own_side = free.iter().filter(|f| !f.0 && !f.1).count();
+        let own_side = free.iter().filter(|f| !f.0).count();
         if free.len() >= count {
             enough_at.get_or_insert(margin);
         }
