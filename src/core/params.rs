@@ -451,6 +451,22 @@ macro_rules! accessors {
     };
 }
 
+/// The accessors of a choice parameter whose field is an enum: each name with its variant.
+macro_rules! choice_accessors {
+    ($field:ident, $($name:literal => $variant:path),+ $(,)?) => {
+        (
+            |p| Value::Choice(match p.$field { $($variant => $name,)+ }),
+            |p, v| {
+                if let Value::Choice(name) = v {
+                    $(if name == $name {
+                        p.$field = $variant;
+                    })+
+                }
+            },
+        )
+    };
+}
+
 /// Every parameter, grouped by the step of the method it belongs to, in the method's order.
 ///
 /// The ranges of α, β and κ are those over which every corner of the box lays out the shared
@@ -581,22 +597,10 @@ pub static PARAMETERS: &[Parameter] = &[
         help:
             "nodal: each centroid's force at its own node, so small crowded regions move as much \
              as large ones; element: the paper's loads along the edges (long edges pull harder).",
-        access: (
-            |p| {
-                Value::Choice(match p.load_model {
-                    LoadModel::Nodal => "nodal",
-                    LoadModel::Element => "element",
-                })
-            },
-            |p, v| {
-                if let Value::Choice(name) = v {
-                    p.load_model = if name == "element" {
-                        LoadModel::Element
-                    } else {
-                        LoadModel::Nodal
-                    }
-                }
-            },
+        access: choice_accessors!(
+            load_model,
+            "nodal" => LoadModel::Nodal,
+            "element" => LoadModel::Element,
         ),
     },
     Parameter {
@@ -660,23 +664,7 @@ pub static PARAMETERS: &[Parameter] = &[
         summary: "Cell shape",
         help: "square: a square lattice, 8 neighbours (edge or corner); hex: hexagons of the same \
              area, 6 neighbours, all sharing an edge (see hex_orientation).",
-        access: (
-            |p| {
-                Value::Choice(match p.cell {
-                    CellShape::Square => "square",
-                    CellShape::Hex => "hex",
-                })
-            },
-            |p, v| {
-                if let Value::Choice(name) = v {
-                    p.cell = if name == "hex" {
-                        CellShape::Hex
-                    } else {
-                        CellShape::Square
-                    }
-                }
-            },
-        ),
+        access: choice_accessors!(cell, "square" => CellShape::Square, "hex" => CellShape::Hex),
     },
     Parameter {
         name: "hex_orientation",
@@ -691,22 +679,10 @@ pub static PARAMETERS: &[Parameter] = &[
         help: "pointy: a vertex at the top, rows of hexagons with every other row offset half a \
              cell to the right; flat: an edge at the top, columns with every other column offset \
              half a cell down. Only used with cell hex.",
-        access: (
-            |p| {
-                Value::Choice(match p.hex_orientation {
-                    HexOrientation::Pointy => "pointy",
-                    HexOrientation::Flat => "flat",
-                })
-            },
-            |p, v| {
-                if let Value::Choice(name) = v {
-                    p.hex_orientation = if name == "flat" {
-                        HexOrientation::Flat
-                    } else {
-                        HexOrientation::Pointy
-                    }
-                }
-            },
+        access: choice_accessors!(
+            hex_orientation,
+            "pointy" => HexOrientation::Pointy,
+            "flat" => HexOrientation::Flat,
         ),
     },
     Parameter {
