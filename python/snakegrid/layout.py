@@ -121,7 +121,7 @@ def _add_features(lib, handle, geometries, ids, labels):
 
 
 def layout(geometries, ids=None, *, labels=None, progress=None, library=None, **options):
-    """Lays out regions as a grid map: one square cell per region.
+    """Lays out regions as a grid map: one cell per region (squares, or hexagons with cell="hex").
 
     `geometries`: shapely polygons or multipolygons, or their WKB, in a planar CRS (project a
     lon/lat layer first, e.g. to working_crs(...)). `ids`: one unique id per region (default

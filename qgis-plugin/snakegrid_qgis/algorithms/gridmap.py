@@ -1,4 +1,4 @@
-"""Grid map (snake model): a polygon layer in, one square cell per region out."""
+"""Grid map (snake model): a polygon layer in, one square or hexagonal cell per region out."""
 
 from qgis.core import (
     QgsFeature,
@@ -39,7 +39,7 @@ ID_FIELD: unique region id (default: the feature id). LABEL_FIELD: a short name 
 the cells when the output is loaded (default: abbr, else name, if present).
 TARGET_CRS: the working and output CRS, as the command line's -t_srs (default: the layer's CRS \
 when it is projected, else an equal-area CRS centred on the layer, chosen by the library).
-OUTPUT: one square per region with every source field and {fields}.
+OUTPUT: one cell per region with every source field and {fields}.
 OUTLINE (optional): the map outline after the Snake, which the lattice was fitted to.
 HEXJSON (optional, hexagonal cells only): the layout as a HexJSON file (Open Innovations' \
 format, as d3-hexjson draws it), each hexagon keyed and labelled by its region id.

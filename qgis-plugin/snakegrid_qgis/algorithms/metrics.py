@@ -26,7 +26,7 @@ HELP = """\
 Scores a grid map against its regions with the metrics of Grid map (snake model), so that a \
 layout edited by hand, or made by another tool, can be compared with the method's on equal terms.
 REGIONS: the source polygon layer, and REGION_ID its id field (default: the feature id).
-GRID: one square cell per region, and GRID_ID its field holding the region's id (default: the \
+GRID: one square or hexagonal cell per region, and GRID_ID its field holding the region's id (default: the \
 field named like REGION_ID). Every region needs exactly one cell and every cell a region; the \
 error names the id otherwise. Columns and rows are recovered from the cell centres and the mean \
 cell side. The regions are projected to the grid layer's CRS.
@@ -55,7 +55,7 @@ class GridMetricsAlgorithm(common.SnakegridAlgorithm):
             REGION_ID, "Region id field (default: the feature id)",
             parentLayerParameterName=REGIONS, optional=True))
         self.addParameter(QgsProcessingParameterFeatureSource(
-            GRID, "Grid layer (one square per region)", [QgsProcessing.TypeVectorPolygon]))
+            GRID, "Grid layer (one square or hexagon per region)", [QgsProcessing.TypeVectorPolygon]))
         self.addParameter(QgsProcessingParameterField(
             GRID_ID, "Grid id field (default: named like the region id field)",
             parentLayerParameterName=GRID, optional=True))
