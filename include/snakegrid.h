@@ -399,6 +399,48 @@ typedef struct snakegrid_layout_metrics {
 } snakegrid_layout_metrics;
 
 /**
+ * How a layout keeps its groups (method.md §10), for a layer with groups. `repr(C)`: the C API
+ * hands it out as it is (snakegrid_group_metrics).
+ */
+typedef struct snakegrid_group_metrics {
+  /**
+   * Share of the blocks (a group's regions on one landmass) whose cells form one
+   * edge-connected piece. Higher is better; 1 when every block holds together.
+   */
+  double whole;
+  /**
+   * Share of the pairs of adjacent groups (groups with adjacent regions) whose cells come
+   * within 1 + group_gap cells of each other: touching without a gap, one empty cell apart
+   * with one. Higher is better.
+   */
+  double adjacency;
+  /**
+   * Mean angle, degrees, between the direction from one adjacent group's regions to the
+   * other's (means of their area centroids) and the direction between their cells (means of
+   * the cell centres). Lower is better.
+   */
+  double orientation;
+  /**
+   * Groups (a region without a group is a group of its own) and blocks.
+   */
+  uint32_t groups;
+  uint32_t blocks;
+  /**
+   * Pairs of touching cells (8-neighbours for squares, 6 for hexagons) of different groups:
+   * 0 when group_gap 1 holds everywhere.
+   */
+  uint32_t contacts;
+  /**
+   * Pairs of adjacent groups.
+   */
+  uint32_t group_pairs;
+  /**
+   * The reach `adjacency` counts, in cells: 1 + group_gap.
+   */
+  uint32_t reach;
+} snakegrid_group_metrics;
+
+/**
  * What the Snake did in one run.
  */
 typedef struct snakegrid_snake_report {
@@ -637,6 +679,23 @@ snakegrid_status snakegrid_regions_add_feature(struct snakegrid_regions *regions
                                                size_t wkb_len);
 
 /**
+ * Sets the group of region `index` (0 for the first added, in the order of addition), whose
+ * regions keep together in one block of cells per landmass (method.md §10; the parameter
+ * group_gap sets whether blocks of different groups may touch): a non-empty UTF-8 name, copied.
+ * `group` NULL clears it: a region without a group is a group of its own, and a map where no
+ * region has a group is laid out without groups. Only the names' equality counts: renaming
+ * every group moves no cell.
+ *
+ * Fails with SNAKEGRID_INVALID_ARGUMENT for an index past the last region, or an empty name;
+ * the handle is then unchanged. Thread safety: not concurrently with any other use of the same
+ * handle.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_regions_set_group(struct snakegrid_regions *regions,
+                                             size_t index,
+                                             const char *group);
+
+/**
  * Makes an empty job (no source, no destination, no overwrite, no update) and writes it to
  * `*out`.
  *
@@ -658,6 +717,8 @@ void snakegrid_job_free(struct snakegrid_job *job);
  * - "src_layer": source layer name (default: the first layer);
  * - "where": OGR SQL attribute filter;
  * - "id_field": field holding the unique region id (default: the feature id);
+ * - "group_field": field whose regions keep together, one block of cells per group on each
+ *   landmass (default: no groups; a null value is a group of its own region);
  * - "dst": destination dataset path; required;
  * - "format": GDAL driver short name (default: from the extension, else GPKG);
  * - "layer_name": output layer name (default: the source layer's);
@@ -830,6 +891,18 @@ snakegrid_status snakegrid_result_region_metrics(const struct snakegrid_result *
 SNAKEGRID_MUST_USE
 snakegrid_status snakegrid_result_layout_metrics(const struct snakegrid_result *result,
                                                  struct snakegrid_layout_metrics *out);
+
+/**
+ * How the chosen layout keeps its groups (method.md §10): the regions were given groups
+ * (snakegrid_regions_set_group, or the dataset job's group_field).
+ *
+ * Fails with SNAKEGRID_INVALID_ARGUMENT for a map laid out without groups.
+ *
+ * Thread safety: any number of threads may read one result at once.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_result_group_metrics(const struct snakegrid_result *result,
+                                                struct snakegrid_group_metrics *out);
 
 /**
  * What the Snake did in the chosen layout's run.

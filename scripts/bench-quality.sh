@@ -2,7 +2,8 @@
 # Quality of the layouts, measured by the shared judge (../shared/eval/gridmap_eval.py, the
 # reference implementation of method.md §8), on every shared layer and on generated ones (random
 # Voronoi layers, islands, a river-like gap, an archipelago; scripts/make-test-layers.py), through the command
-# line with the defaults and with -refine false; writes QUALITY.md with every metric in one
+# line with the defaults, with -refine false, in hexagons and (us_counties) grouped by state;
+# writes QUALITY.md with every metric in one
 # table and the reference figures of other tools beside them. Re-run it before any stop that
 # touches the core.
 #
@@ -64,6 +65,37 @@ print("\t".join([name, variant, "%.1f" % float(seconds)] + [
     done
 done
 
+# Groups (issue 17): us_counties by state, squares and hexagons, with and without a gap; the
+# judge's metrics and the layout's own group metrics (from the JSON report).
+grouped="$work/grouped.tsv"
+: > "$grouped"
+for variant in group group-gap group-hex group-hex-gap; do
+    options=("$@" -group state_abbr)
+    case "$variant" in
+        *-gap) options+=(-group_gap 1) ;;
+    esac
+    case "$variant" in
+        group-hex*) options+=(-cell hex) ;;
+    esac
+    grid="$work/us_counties-$variant.gpkg"
+    report="$work/us_counties-$variant.json"
+    started=$(date +%s.%N)
+    "$cli" -q -id id "${options[@]}" -json "$report" "$grid" "$data/us_counties.gpkg"
+    seconds=$(echo "$(date +%s.%N) - $started" | bc)
+    python3 "$judge" --regions "$data/us_counties.gpkg" --grid "$grid" --id id |
+        python3 -c '
+import json, sys
+j = json.load(sys.stdin)
+variant, seconds, report = sys.argv[1:4]
+g = json.load(open(report))["groups"]
+print("\t".join(["us_counties", variant, "%.1f" % float(seconds)] + [
+    "%.3f" % j["adjacency_kept_queen"], "%.1f" % j["orientation_deg"],
+    "%.3f" % j["location_cells"], "%.3f" % j["shape_fd"], "%d" % j["components_cells"],
+    "%d" % j["holes_cells"], "%.3f" % g["whole"], "%.3f" % g["adjacency"], "%d" % g["reach"],
+    "%.1f" % g["orientation"], "%d" % g["contacts"]]))' "$variant" "$seconds" "$report" >> "$grouped"
+    echo "quality: us_counties $variant done" >&2
+done
+
 {
     echo "# Quality"
     echo
@@ -90,6 +122,20 @@ done
     while IFS=$'\t' read -r -a cells; do
         printf '| %s |\n' "$(IFS='|'; echo "${cells[*]}" | sed 's/|/ | /g')"
     done < "$rows"
+    echo
+    echo "## Groups (\`-group state_abbr\`, issue 17)"
+    echo
+    echo "us_counties with its 49 states as groups; *-gap* adds \`-group_gap 1\`, *hex* \`-cell hex\`."
+    echo "The judge's metrics, then the layout's group metrics (JSON report \`groups\`): the share of"
+    echo "blocks (a state's counties on one landmass) in one piece, the share of adjacent state pairs"
+    echo "whose cells come within *reach* cells (1 + group_gap), the direction error between states"
+    echo "and the touching cells of different states."
+    echo
+    echo "| layer | run | time s | adj 8 | orient ° | location | shape | pieces | holes | blocks whole | groups near | reach | group orient ° | contacts |"
+    echo "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    while IFS=$'\t' read -r -a cells; do
+        printf '| %s |\n' "$(IFS='|'; echo "${cells[*]}" | sed 's/|/ | /g')"
+    done < "$grouped"
     echo
     echo "## Other tools, by the same judge (issue 13; adjacency 8-nbr / orientation / location / shape)"
     echo

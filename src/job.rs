@@ -12,6 +12,8 @@ pub struct Job {
     pub where_clause: Option<String>,
     /// Field holding the unique region id (`-id`); the feature id when `None`.
     pub id_field: Option<String>,
+    /// Field whose regions keep together (`-group`, method.md §10); no groups when `None`.
+    pub group_field: Option<String>,
     /// Destination dataset path.
     pub dst: String,
     /// GDAL driver short name (`-f`); guessed from the extension, else GeoPackage, when `None`.

@@ -25,7 +25,7 @@ pub mod wkb;
 
 pub use crate::core::{crs, diagnostics, fields, hexjson, input, params, tiling};
 pub use crate::core::{
-    generate, score, CandidateReport, CellLayout, Error, GridMap, HexOrientation, LayoutMetrics,
-    LoadModel, Params, Progress, Region, RegionCell, RegionMetrics, SnakeReport, StopReason,
-    PARAMETERS,
+    generate, score, CandidateReport, CellLayout, Error, GridMap, GroupMetrics, HexOrientation,
+    LayoutMetrics, LoadModel, Params, Progress, Region, RegionCell, RegionMetrics, SnakeReport,
+    StopReason, PARAMETERS,
 };

@@ -71,7 +71,7 @@ fn source_fields(layer: &str) -> Vec<String> {
     layer.defn().fields().map(|f| f.name()).collect()
 }
 
-const ADDED: [&str; 7] = [
+const ADDED: [&str; 8] = [
     "grid_col",
     "grid_row",
     "grid_q",
@@ -79,6 +79,7 @@ const ADDED: [&str; 7] = [
     "cell_disp",
     "nbr_kept",
     "orient_err",
+    "grid_group",
 ];
 
 /// Every row is an axis-aligned square of the same side, placed as its (grid_col, grid_row) says
@@ -1013,4 +1014,58 @@ fn a_world_layer_in_longitude_and_latitude_is_laid_out_in_equal_earth() {
     let srs = written.layer(0).unwrap().spatial_ref().unwrap();
     assert_eq!(srs.name().unwrap(), "WGS 84 / Equal Earth Greenwich");
     assert!(srs.to_proj4().unwrap().contains("+proj=eqearth"));
+}
+
+#[test]
+fn a_group_field_keeps_groups_together_and_is_reported() {
+    let scratch = Scratch::new("groups");
+    let src = common::shared_layer("us_counties");
+    let (grid, report) = (scratch.path("g.gpkg"), scratch.path("g.json"));
+    let out = snakegrid([
+        "-id",
+        "id",
+        "-where",
+        "state_abbr IN ('NC', 'SC')",
+        "-group",
+        "state_abbr",
+        "-group_gap",
+        "1",
+        "-json",
+        p(&report),
+        p(&grid),
+        p(&src),
+    ]);
+    assert_success(&out);
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(summary.contains("groups: 2 in "), "{summary}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(report["source"]["group_field"], "state_abbr");
+    assert_eq!(report["groups"]["groups"], 2);
+    assert_eq!(report["groups"]["contacts"], 0);
+    assert_eq!(report["groups"]["reach"], 2);
+    // grid_group numbers the blocks from 1; each state's mainland block holds most of it.
+    let (names, rows) = read_rows(&grid);
+    assert_eq!(names.last().map(String::as_str), Some("grid_group"));
+    let mut blocks: HashMap<(String, String), usize> = HashMap::new();
+    for row in &rows {
+        let key = (
+            row.fields["state_abbr"].clone(),
+            row.fields["grid_group"].clone(),
+        );
+        *blocks.entry(key).or_default() += 1;
+    }
+    let numbers: HashSet<&String> = blocks.keys().map(|(_, b)| b).collect();
+    assert!(numbers.contains(&"1".to_owned()));
+    assert_eq!(
+        blocks.len(),
+        numbers.len(),
+        "a block belongs to one state: {blocks:?}"
+    );
+    // A group field the layer lacks is refused before any work, naming the option.
+    assert_fails(
+        &snakegrid(["-q", "-group", "nope", p(&scratch.path("x.gpkg")), p(&src)]),
+        1,
+        "-group \"nope\": the source layer has no such field",
+    );
 }

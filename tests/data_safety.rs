@@ -935,6 +935,7 @@ fn computed_fields_keep_their_names_and_colliding_source_fields_are_renamed() {
                 "cell_disp",
                 "nbr_kept",
                 "orient_err",
+                "grid_group",
             ]
             .map(String::from),
         );

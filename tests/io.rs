@@ -176,7 +176,8 @@ fn every_source_field_keeps_its_name_type_subtype_and_value() {
             "grid_r",
             "cell_disp",
             "nbr_kept",
-            "orient_err"
+            "orient_err",
+            "grid_group"
         ]
     );
     // Every source field is the same field with the same values, the one that collided with a

@@ -385,6 +385,7 @@ fn densified(regions: &[Region], pieces: usize) -> Vec<Region> {
                     })
                     .collect(),
             ),
+            group: region.group.clone(),
         })
         .collect()
 }

@@ -68,6 +68,7 @@ fn voronoi(points: &[Coord<f64>]) -> Vec<Region> {
             Region {
                 id: format!("v{i}"),
                 geometry: MultiPolygon(vec![Polygon::new(LineString(cell), vec![])]),
+                group: None,
             }
         })
         .collect()

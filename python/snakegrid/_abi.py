@@ -86,12 +86,28 @@ class LayoutMetrics(ctypes.Structure):
     ]
 
 
+class GroupMetrics(ctypes.Structure):
+    """snakegrid_group_metrics."""
+
+    _fields_ = [
+        ("whole", ctypes.c_double),
+        ("adjacency", ctypes.c_double),
+        ("orientation", ctypes.c_double),
+        ("groups", ctypes.c_uint32),
+        ("blocks", ctypes.c_uint32),
+        ("contacts", ctypes.c_uint32),
+        ("group_pairs", ctypes.c_uint32),
+        ("reach", ctypes.c_uint32),
+    ]
+
+
 #: Every mirrored struct under its C name, for the layout test.
 STRUCTS = {
     "snakegrid_option": Option,
     "snakegrid_field": Field,
     "snakegrid_region_metrics": RegionMetrics,
     "snakegrid_layout_metrics": LayoutMetrics,
+    "snakegrid_group_metrics": GroupMetrics,
 }
 
 #: snakegrid_option_kind values, by position.
@@ -123,6 +139,7 @@ SIGNATURES = {
     "snakegrid_regions_free": (None, [_P]),
     "snakegrid_regions_add": (_STATUS, [_P, _TEXT, _WKB, _SIZE]),
     "snakegrid_regions_add_feature": (_STATUS, [_P, _TEXT, _TEXT, _WKB, _SIZE]),
+    "snakegrid_regions_set_group": (_STATUS, [_P, _SIZE, _TEXT]),
     "snakegrid_run": (_STATUS, [_P, _P, PROGRESS, _P, _OUT_P]),
     "snakegrid_result_free": (None, [_P]),
     "snakegrid_result_count": (_STATUS, [_P, _OUT_SIZE]),
@@ -131,6 +148,7 @@ SIGNATURES = {
     "snakegrid_result_cell_wkb": (_STATUS, [_P, _SIZE, _OUT_BYTES, _OUT_SIZE]),
     "snakegrid_result_region_metrics": (_STATUS, [_P, _SIZE, ctypes.POINTER(RegionMetrics)]),
     "snakegrid_result_layout_metrics": (_STATUS, [_P, ctypes.POINTER(LayoutMetrics)]),
+    "snakegrid_result_group_metrics": (_STATUS, [_P, ctypes.POINTER(GroupMetrics)]),
     "snakegrid_result_moved_outline_wkb": (_STATUS, [_P, _OUT_BYTES, _OUT_SIZE]),
     "snakegrid_result_note_count": (_STATUS, [_P, _OUT_SIZE]),
     "snakegrid_result_note": (_STATUS, [_P, _SIZE, _OUT_TEXT]),

@@ -29,6 +29,9 @@ RegionMetrics = _dataclass_of(
     _abi.RegionMetrics, "How well one region is placed (snakegrid_region_metrics).")
 LayoutMetrics = _dataclass_of(
     _abi.LayoutMetrics, "The layout's metrics, method.md section 8 (snakegrid_layout_metrics).")
+GroupMetrics = _dataclass_of(
+    _abi.GroupMetrics, "How a layout keeps its groups, method.md section 10 "
+    "(snakegrid_group_metrics).")
 
 
 def _copy(made, struct):
@@ -79,6 +82,9 @@ class GridMap:
     #: The layout as HexJSON (Open Innovations' format, keyed and labelled by the ids) for
     #: hexagonal cells (option cell="hex"); None for squares.
     hexjson: Optional[str] = None
+    #: How the layout keeps its groups (GroupMetrics, method.md section 10) when layout() was
+    #: given groups; None without.
+    group_metrics: Any = None
 
     def table(self):
         """The cells as columns, {"id": [...], <each added field>: [...], "geometry": [...]},
@@ -120,12 +126,15 @@ def _add_features(lib, handle, geometries, ids, labels):
     return geometries
 
 
-def layout(geometries, ids=None, *, labels=None, progress=None, library=None, **options):
+def layout(geometries, ids=None, *, labels=None, groups=None, progress=None, library=None,
+           **options):
     """Lays out regions as a grid map: one cell per region (squares, or hexagons with cell="hex").
 
     `geometries`: shapely polygons or multipolygons, or their WKB, in a planar CRS (project a
     lon/lat layer first, e.g. to working_crs(...)). `ids`: one unique id per region (default
-    the positions). `options`: the method's parameters by name (see options()), e.g.
+    the positions). `groups`: one group per region (any values, compared as id_text() gives
+    them; None: a group of its own), whose regions keep together in one block of cells per
+    landmass; option group_gap=1 keeps the blocks a cell apart. `options`: the method's parameters by name (see options()), e.g.
     ``alpha=2, refine=False, shifts=[(0, 0), (0.5, 0.5)]``. `progress(fraction, message)` is
     called during the run, possibly from another thread; returning False cancels the run,
     which then raises Cancelled. Bad input or options raise SnakegridError with the library's
@@ -146,6 +155,15 @@ def layout(geometries, ids=None, *, labels=None, progress=None, library=None, **
     c_progress = _abi.PROGRESS(report) if progress else _abi.PROGRESS()
     with lib.handle("regions") as regions, lib.handle("options") as handle:
         geometries = _add_features(lib, regions, geometries, ids, labels)
+        if groups is not None:
+            groups = list(groups)
+            if len(groups) != len(geometries):
+                raise ValueError(f"{len(geometries)} geometries and {len(groups)} groups: give "
+                                 "one group per region")
+            for k, group in enumerate(groups):
+                name = id_text(group)
+                lib.check(lib.c.snakegrid_regions_set_group(
+                    regions, k, None if name is None else name.encode()))
         set_options(lib, handle, options)
         result = ctypes.c_void_p()
         status = lib.c.snakegrid_run(regions, handle, c_progress, None, ctypes.byref(result))
@@ -191,7 +209,17 @@ def _read(lib, result, as_shapely):
         moved_outline=_geometry.from_wkb(
             lib.bytes(c.snakegrid_result_moved_outline_wkb, result), as_shapely),
         notes=[lib.text(c.snakegrid_result_note, result, i) for i in range(notes_count.value)],
-        hexjson=_hexjson(lib, result))
+        hexjson=_hexjson(lib, result),
+        group_metrics=_group_metrics(lib, result))
+
+
+def _group_metrics(lib, result):
+    """The result's GroupMetrics, or None for a layout without groups (which the library
+    refuses)."""
+    out = _abi.GroupMetrics()
+    if lib.c.snakegrid_result_group_metrics(result, ctypes.byref(out)) != 0:
+        return None
+    return _copy(GroupMetrics, out)
 
 
 def _hexjson(lib, result):

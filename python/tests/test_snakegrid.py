@@ -54,6 +54,24 @@ def test_hexagons_give_the_command_line_cells_and_a_hexjson(us_states, tmp_path)
     assert snakegrid.layout(us_states.geometry, us_states["id"]).hexjson is None
 
 
+def test_groups_give_the_command_line_cells_and_group_metrics(us_states, tmp_path):
+    # Two groups, the states west and east of the median centroid, a cell apart.
+    frame = us_states.copy()
+    x = frame.geometry.centroid.x
+    frame["half"] = ["west" if v < x.median() else "east" for v in x]
+    source = str(tmp_path / "halves.gpkg")
+    pyogrio.write_dataframe(frame, source)
+    grid = snakegrid.layout(frame.geometry, frame["id"], groups=frame["half"], group_gap=1)
+    cli = cli_grid(str(tmp_path / "grouped.gpkg"), source, "-group", "half", "-group_gap", "1")
+    assert python_cells(grid) == cells_of(cli)
+    metrics = grid.group_metrics
+    assert (metrics.groups, metrics.contacts, metrics.reach) == (2, 0, 2)
+    assert [c.fields["grid_group"] for c in grid.cells] == list(cli["grid_group"])
+    assert snakegrid.layout(us_states.geometry, us_states["id"]).group_metrics is None
+    with pytest.raises(ValueError, match="one group per region"):
+        snakegrid.layout(us_states.geometry, us_states["id"], groups=["west"])
+
+
 def test_options_are_the_command_line_parameters():
     help_text = subprocess.run([CLI, "--help"], check=True, capture_output=True,
                                text=True).stdout

@@ -17,6 +17,7 @@ import pytest
 from qgis.core import (
     QgsApplication,
     QgsCoordinateReferenceSystem,
+    QgsCoordinateTransformContext,
     QgsFeature,
     QgsFeatureRequest,
     QgsField,
@@ -29,6 +30,7 @@ from qgis.core import (
     QgsProcessingParameterString,
     QgsProject,
     QgsRectangle,
+    QgsVectorFileWriter,
     QgsVectorLayer,
 )
 from qgis.PyQt.QtCore import QVariant
@@ -157,14 +159,43 @@ def test_provider_and_algorithms_are_registered_and_findable(qgis_app):
         assert len(help_text) > 300 and not re.search(r"<\w+>", help_text), "HTML in the help"
 
 
+def test_a_group_field_gives_the_command_line_layout_and_group_outputs(qgis_app, tmp_path):
+    # The states west and east of the middle of the layer, as two groups a cell apart.
+    layer = QgsVectorLayer(US_STATES, "us_states", "ogr")
+    middle = layer.extent().center().x()
+    source = str(tmp_path / "halves.gpkg")
+    halves = QgsVectorLayer("MultiPolygon?crs=" + layer.crs().authid(), "halves", "memory")
+    provider = halves.dataProvider()
+    provider.addAttributes([QgsField("id", QVariant.String), QgsField("half", QVariant.String)])
+    halves.updateFields()
+    for feature in layer.getFeatures():
+        out = QgsFeature(halves.fields())
+        west = feature.geometry().centroid().asPoint().x() < middle
+        out.setAttributes([feature["id"], "west" if west else "east"])
+        out.setGeometry(feature.geometry())
+        provider.addFeature(out)
+    options = QgsVectorFileWriter.SaveVectorOptions()
+    options.driverName = "GPKG"
+    QgsVectorFileWriter.writeAsVectorFormatV3(halves, source, QgsCoordinateTransformContext(),
+                                              options)
+    result = run("gridmap", INPUT=source, ID_FIELD="id", GROUP_FIELD="half", GROUP_GAP=1,
+                 OUTPUT="memory:")
+    expected = layout(cli(str(tmp_path / "cli.gpkg"), source, "-group", "half",
+                          "-group_gap", "1"))
+    assert layout(result["OUTPUT"]) == expected
+    assert result["GROUP_CONTACTS"] == 0 and result["GROUPS_WHOLE"] == 1.0
+    blocks = {f["half"]: f["grid_group"] for f in result["OUTPUT"].getFeatures()}
+    assert sorted(blocks.values()) == [1, 2]
+
+
 def test_parameters_are_the_library_table_in_upper_case(qgis_app):
     import snakegrid
 
     alg = algorithm("gridmap")
     table = snakegrid.options()
     method = [p for p in alg.parameterDefinitions()
-              if p.name() not in ("INPUT", "ID_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT",
-                                  "OUTLINE", "HEXJSON")]
+              if p.name() not in ("INPUT", "ID_FIELD", "GROUP_FIELD", "LABEL_FIELD",
+                                  "TARGET_CRS", "OUTPUT", "OUTLINE", "HEXJSON")]
     assert [p.name() for p in method] == [o.name.upper() for o in table]
     assert all(p.name() == p.name().upper() for p in alg.parameterDefinitions())
     for option, parameter in zip(table, method):

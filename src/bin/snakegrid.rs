@@ -53,6 +53,10 @@ struct Cli {
     /// Field with each region's unique id (any type) [default: the feature id]
     #[arg(long = "id", value_name = "FIELD", allow_hyphen_values = true)]
     id: Option<String>,
+    /// Field whose regions keep together: one block of cells per group on each landmass (a
+    /// null value is a group of its own region; see group_gap)
+    #[arg(long = "group", value_name = "FIELD", allow_hyphen_values = true)]
+    group: Option<String>,
     /// Working and output CRS, any definition GDAL accepts [default: the source CRS; a geographic
     /// source is projected to Lambert azimuthal equal-area centred on the layer]
     #[arg(long = "t_srs", value_name = "CRS", allow_hyphen_values = true)]
@@ -360,6 +364,7 @@ fn main() -> ExitCode {
         src_layer: cli.src_layer,
         where_clause: cli.where_clause,
         id_field: cli.id,
+        group_field: cli.group,
         dst: cli.dst,
         format: cli.format,
         layer_name: cli.nln,

@@ -5,6 +5,7 @@
 
 use super::frame::Frame;
 use super::grid::{self, Lattice};
+use super::groups;
 use super::landmass;
 use super::metrics::{self, Scored};
 use super::network::{self, Network};
@@ -23,7 +24,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 use std::borrow::Cow;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 
 /// How far from the layer's centre, in mean region sizes (cells), a coordinate may lie. Real
@@ -160,7 +161,10 @@ fn generate_here(
         })
         .collect::<Result<Vec<_>, Error>>()?;
 
+    let grouped = regions.iter().any(|r| r.group.is_some());
     let context = Context {
+        blocks: blocks_of(regions, &order, &prepared, grouped),
+        grouped,
         prepared: &prepared,
         frame,
         reference: metrics::Reference::new(&prepared, frame),
@@ -553,8 +557,62 @@ struct Layout {
     breaks: usize,
 }
 
+/// The regions' blocks (method.md §10): per landmass of the layout, each group's regions, in
+/// the geometric order; without groups, the landmasses.
+///
+/// With groups, the landmasses are those of the regions' union, each laid on the part of the
+/// simplified outline that most of its regions lie on: simplifying to a hundredth of a cell cuts
+/// necks far narrower than a cell (Whidbey Island's 3 km of shore with the mainland, under
+/// cells of 50 km), which would part an island county from its state's block although the two
+/// share a border.
+fn blocks_of(
+    regions: &[Region],
+    order: &[usize],
+    prepared: &Prepared,
+    grouped: bool,
+) -> groups::Blocks {
+    let part_of = if grouped {
+        let landmasses = prepared
+            .landmass_of
+            .iter()
+            .map(|&l| l + 1)
+            .max()
+            .unwrap_or(0);
+        let mut counts: Vec<HashMap<usize, usize>> = vec![HashMap::new(); landmasses];
+        for (&l, &p) in prepared.landmass_of.iter().zip(&prepared.part_of) {
+            *counts[l].entry(p).or_default() += 1;
+        }
+        let main: Vec<usize> = (counts.iter())
+            .map(|c| {
+                (c.iter())
+                    .max_by_key(|&(&p, &n)| (n, std::cmp::Reverse(p)))
+                    .map_or(0, |(&p, _)| p)
+            })
+            .collect();
+        prepared.landmass_of.iter().map(|&l| main[l]).collect()
+    } else {
+        prepared.part_of.clone()
+    };
+    let mut names: HashMap<&str, usize> = HashMap::new();
+    let group_of: Vec<Option<usize>> = (order.iter())
+        .map(|&i| {
+            if !grouped {
+                // One group: the blocks are the landmasses.
+                return Some(0);
+            }
+            let next = names.len();
+            let group = regions[i].group.as_deref()?;
+            Some(*names.entry(group).or_insert(next))
+        })
+        .collect();
+    groups::Blocks::new(&part_of, &group_of)
+}
+
 /// What every candidate shares.
 struct Context<'a> {
+    /// Each region's block, and whether the layer has groups at all.
+    blocks: groups::Blocks,
+    grouped: bool,
     prepared: &'a Prepared,
     frame: Frame,
     /// What the layouts are scored against.
@@ -578,30 +636,94 @@ impl Context<'_> {
         let m = network.centroids;
         let moved = &run.positions[..m];
         let moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
-        let mut lattice = grid::frame(&moved_outline, m, shift, Tiling::of(self.params));
         // One multipolygon per part of the outline: polygons_of keeps the parts' order.
         let parts: Vec<MultiPolygon<f64>> = (moved_outline.0.iter())
             .map(|p| MultiPolygon(vec![p.clone()]))
             .collect();
-        let part_of = &self.prepared.part_of;
         let mut demands = vec![0; parts.len()];
-        for &p in part_of {
+        for &p in &self.blocks.of {
+            let p = self.blocks.landmass[p];
             // A part the moved outline lost (a ring collapsed by the Snake) has no cells.
             *demands.get_mut(p).ok_or_else(|| {
                 Error::Internal(format!("the moved outline lost landmass {p}"))
             })? += 1;
         }
+        // Gaps between groups take cells of their own, which the lattice's cell size counts.
+        let gap = self.grouped && self.params.group_gap > 0;
+        if gap {
+            demands = groups::cells_with_gaps(&self.blocks, parts.len());
+        }
+        let wanted: usize = demands.iter().sum();
+        let mut lattice = grid::frame(&moved_outline, wanted, shift, Tiling::of(self.params));
         let selection = landmass::select(&lattice, &parts, &demands, self.params.refine_cell_ratio);
         lattice.cells = selection.cells;
-        if selection.assigned != m {
+        if selection.assigned != wanted {
             return Err(Error::Internal(format!(
-                "the lattice has {} cells for {m} regions",
+                "the lattice has {} cells for {wanted}",
                 selection.assigned
             )));
         }
-        // Each landmass's regions are assigned among its own cells.
+        let mut cells = if self.grouped {
+            if !gap {
+                // Without gaps the blocks share out exactly the landmasses' cells.
+                lattice.cells.truncate(selection.assigned);
+            }
+            groups::assign(&mut lattice, &self.blocks, moved, gap, &|done| {
+                report(Stage::Assigning, done)
+            })
+            .ok_or(Error::Cancelled)?
+        } else {
+            self.assign(&mut lattice, moved, parts.len(), report)?
+        };
+        let area = &self.prepared.area_centroids;
+        let misplaced = |region: usize, p: Coord<f64>| self.home.misplaced(region, p);
+        let homes = landmass::Homes {
+            places: area,
+            adjacency: &self.prepared.adjacency,
+            misplaced: self.home.any_counted().then_some(&misplaced),
+        };
+        landmass::settle(&mut lattice, &cells, &homes, self.params);
+        if self.grouped {
+            groups::dock(&mut lattice, &self.blocks, area, gap);
+        }
+        if self.params.refine {
+            cells = self.refine(&lattice, &cells, seed, report)?;
+        }
+        let (metrics, region_metrics) = self.evaluate(&lattice, &cells, moved);
+        let (positions, landmasses): (Vec<(i32, i32)>, Vec<usize>) = (cells.iter())
+            .map(|&k| {
+                let cell = lattice.cells[k];
+                ((cell.col, cell.row), cell.part)
+            })
+            .unzip();
+        let mut breaks = metrics::landmass_breaks(&positions, &landmasses, lattice.tiling);
+        if self.grouped {
+            breaks += metrics::landmass_breaks(&positions, &self.blocks.of, lattice.tiling);
+        }
+        Ok(Layout {
+            breaks,
+            lattice,
+            cells,
+            metrics,
+            region_metrics,
+            moved_outline,
+        })
+    }
+
+    /// Each landmass's regions assigned among its own cells (method.md §6), the first `m` of
+    /// `lattice.cells`: per region, an index into them.
+    fn assign(
+        &self,
+        lattice: &mut Lattice,
+        moved: &[Coord<f64>],
+        parts: usize,
+        report: &dyn Fn(Stage, f64) -> bool,
+    ) -> Result<Vec<usize>, Error> {
+        let m = moved.len();
+        let part_of = &self.prepared.part_of;
+        debug_assert!((0..m).all(|i| self.blocks.landmass[self.blocks.of[i]] == part_of[i]));
         let mut cells = vec![0; m];
-        for part in 0..parts.len() {
+        for part in 0..parts {
             let regions: Vec<usize> = (0..m).filter(|&i| part_of[i] == part).collect();
             let own: Vec<usize> = (0..m).filter(|&k| lattice.cells[k].part == part).collect();
             let points: Vec<Coord<f64>> = regions.iter().map(|&i| moved[i]).collect();
@@ -618,32 +740,7 @@ impl Context<'_> {
                 cells[region] = own[choice];
             }
         }
-        let area = &self.prepared.area_centroids;
-        let misplaced = |region: usize, p: Coord<f64>| self.home.misplaced(region, p);
-        let homes = landmass::Homes {
-            places: area,
-            adjacency: &self.prepared.adjacency,
-            misplaced: self.home.any_counted().then_some(&misplaced),
-        };
-        landmass::settle(&mut lattice, &cells, &homes, self.params);
-        if self.params.refine {
-            cells = self.refine(&lattice, &cells, seed, report)?;
-        }
-        let (metrics, region_metrics) = self.evaluate(&lattice, &cells, moved);
-        let (positions, landmasses): (Vec<(i32, i32)>, Vec<usize>) = (cells.iter())
-            .map(|&k| {
-                let cell = lattice.cells[k];
-                ((cell.col, cell.row), cell.part)
-            })
-            .unzip();
-        Ok(Layout {
-            breaks: metrics::landmass_breaks(&positions, &landmasses, lattice.tiling),
-            lattice,
-            cells,
-            metrics,
-            region_metrics,
-            moved_outline,
-        })
+        Ok(cells)
     }
 
     /// The refinement (§6b) of `cells` on `lattice`, towards where §8 will measure each region
@@ -666,12 +763,25 @@ impl Context<'_> {
             self.home
                 .misplaced(region, lattice.centre(col, row) * scale + offset)
         };
+        // With groups, a region only swaps cells within its block, so every block keeps its
+        // patch: the refinement sees the blocks as its landmasses, and no free cells.
+        let by_block;
+        let (lattice, part_of) = if self.grouped {
+            let mut tagged = lattice.clone();
+            for (cell, &block) in tagged.cells.iter_mut().zip(&self.blocks.of) {
+                cell.part = block;
+            }
+            by_block = tagged;
+            (&by_block, &self.blocks.of)
+        } else {
+            (lattice, &self.prepared.part_of)
+        };
         let layout = refine::Layout {
             adjacency: &self.prepared.adjacency,
             centroids: area,
             targets: &targets,
             lattice,
-            part_of: &self.prepared.part_of,
+            part_of,
             misplaced: self.home.any_counted().then_some(&misplaced),
         };
         refine::refine(&layout, cells, self.params, seed, &|done| {
@@ -730,6 +840,18 @@ impl Context<'_> {
         let row0 = used.iter().map(|c| c.1).min().unwrap_or(0);
         // Axial positions from the one at offset column 0, row 0.
         let reference = lattice.tiling.from_offset_coordinates((col0, row0));
+        // Blocks numbered by their top row, then their leftmost column in it.
+        let mut corner = vec![(i32::MAX, i32::MAX); self.blocks.count()];
+        for (k, &(col, row)) in used.iter().enumerate() {
+            let c = &mut corner[self.blocks.of[k]];
+            *c = (*c).min((row, col));
+        }
+        let mut by_corner: Vec<usize> = (0..corner.len()).collect();
+        by_corner.sort_by_key(|&b| (corner[b], b));
+        let mut number = vec![0u32; corner.len()];
+        for (n, &b) in by_corner.iter().enumerate() {
+            number[b] = n as u32 + 1;
+        }
         let mut cells: Vec<Option<RegionCell>> = vec![None; regions.len()];
         for (k, &input) in order.iter().enumerate() {
             let (col, row) = used[k];
@@ -740,6 +862,7 @@ impl Context<'_> {
                 row: row - row0,
                 q: positions[k].0 - reference.0,
                 r: positions[k].1 - reference.1,
+                block: number[self.blocks.of[k]],
                 cell: geo::MapCoords::map_coords(&square, |c| f.to_map(c)),
                 centroid: f.to_map(self.prepared.centroids[k]),
                 moved_centroid: f.to_map(run.positions[k]),
@@ -767,6 +890,21 @@ impl Context<'_> {
             cells: cells.into_iter().flatten().collect(),
             cell_size: lattice.cell_size * f.scale,
             metrics: best.metrics,
+            groups: self.grouped.then(|| {
+                let centres: Vec<Coord<f64>> = positions
+                    .iter()
+                    .map(|&(c, r)| lattice.centre(c, r))
+                    .collect();
+                groups::metrics(&groups::GroupLayout {
+                    blocks: &self.blocks,
+                    positions: &positions,
+                    centres: &centres,
+                    places: &self.prepared.area_centroids,
+                    adjacency: &self.prepared.adjacency,
+                    tiling: lattice.tiling,
+                    gap: self.params.group_gap,
+                })
+            }),
             snake: run.report.clone(),
             candidates,
             moved_outline: f.polygons_to_map(&best.moved_outline),

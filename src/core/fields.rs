@@ -68,6 +68,15 @@ pub static OUTPUT_FIELDS: &[OutputField] = &[
         description: "mean direction error towards the region's neighbours, degrees",
         value: |c| c.metrics.orientation_error,
     },
+    // Last, so that the fields before keep their indices in the C API.
+    OutputField {
+        name: "grid_group",
+        integer: true,
+        description: "the region's block of cells, numbered from 1 by the block's top row, then \
+                      its leftmost column: with -group, its group's cells on its landmass \
+                      (method.md §10); without, its landmass's",
+        value: |c| f64::from(c.block),
+    },
 ];
 
 #[cfg(test)]

@@ -254,7 +254,7 @@ fn touches_another(
 /// with this, at better adjacency and direction. Squares touch most neighbours at a corner
 /// only, which joins nothing; there it was measured to cost more than it gives (world_countries:
 /// 17 → 23 pieces but location 1.38 → 1.55 cells), so squares place as before.
-fn keeps_landmasses_apart(tiling: Tiling) -> bool {
+pub fn keeps_landmasses_apart(tiling: Tiling) -> bool {
     tiling != Tiling::Square
 }
 

@@ -19,6 +19,7 @@ mod forces;
 mod frame;
 pub(crate) mod geometry;
 mod grid;
+mod groups;
 pub mod hexjson;
 pub mod input;
 mod landmass;
@@ -41,11 +42,15 @@ use std::fmt;
 pub use params::{HexOrientation, LoadModel, Params, PARAMETERS};
 pub use score::score;
 
-/// One input region: a unique id and its (multi)polygon in a planar CRS.
+/// One input region: a unique id, its (multi)polygon in a planar CRS and, optionally, the
+/// group whose regions keep together (method.md §10).
 #[derive(Clone, Debug)]
 pub struct Region {
     pub id: String,
     pub geometry: MultiPolygon<f64>,
+    /// Its group's name; `None`: a group of its own. A layer where no region has a group is
+    /// laid out without groups.
+    pub group: Option<String>,
 }
 
 /// Why a run failed. `InvalidInput` names the offending feature when there is one.
@@ -187,6 +192,34 @@ pub struct LayoutMetrics {
     pub notches: u32,
 }
 
+/// How a layout keeps its groups (method.md §10), for a layer with groups. `repr(C)`: the C API
+/// hands it out as it is (snakegrid_group_metrics).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct GroupMetrics {
+    /// Share of the blocks (a group's regions on one landmass) whose cells form one
+    /// edge-connected piece. Higher is better; 1 when every block holds together.
+    pub whole: f64,
+    /// Share of the pairs of adjacent groups (groups with adjacent regions) whose cells come
+    /// within 1 + group_gap cells of each other: touching without a gap, one empty cell apart
+    /// with one. Higher is better.
+    pub adjacency: f64,
+    /// Mean angle, degrees, between the direction from one adjacent group's regions to the
+    /// other's (means of their area centroids) and the direction between their cells (means of
+    /// the cell centres). Lower is better.
+    pub orientation: f64,
+    /// Groups (a region without a group is a group of its own) and blocks.
+    pub groups: u32,
+    pub blocks: u32,
+    /// Pairs of touching cells (8-neighbours for squares, 6 for hexagons) of different groups:
+    /// 0 when group_gap 1 holds everywhere.
+    pub contacts: u32,
+    /// Pairs of adjacent groups.
+    pub group_pairs: u32,
+    /// The reach `adjacency` counts, in cells: 1 + group_gap.
+    pub reach: u32,
+}
+
 /// Per-region quality. `repr(C)`: the C API hands it out as it is (snakegrid_region_metrics).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -215,6 +248,9 @@ pub struct RegionCell {
     /// column and the row.
     pub q: i32,
     pub r: i32,
+    /// Its block of cells (method.md §10): its group's on its landmass, or without groups its
+    /// landmass's; numbered from 1 by the block's top row, then its leftmost column there.
+    pub block: u32,
     /// The square or hexagon, in map units.
     pub cell: Polygon<f64>,
     /// The region's centroid (§1), map units.
@@ -252,6 +288,8 @@ pub struct GridMap {
     pub cell_size: f64,
     /// Metrics of the chosen layout.
     pub metrics: LayoutMetrics,
+    /// How it keeps the groups, for a layer with groups.
+    pub groups: Option<GroupMetrics>,
     /// The chosen candidate's Snake run.
     pub snake: SnakeReport,
     /// All candidates, best first; the first is the chosen layout.

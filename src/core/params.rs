@@ -56,6 +56,7 @@ pub struct Params {
     pub point_adjacency: bool,
     pub cell: CellShape,
     pub hex_orientation: HexOrientation,
+    pub group_gap: usize,
     pub shifts: Vec<[f64; 2]>,
     pub noise_levels: Vec<f64>,
     /// Most candidate layouts; `None`: [`Params::layout_budget`] decides by the number of
@@ -94,6 +95,7 @@ impl Default for Params {
             point_adjacency: false,
             cell: CellShape::Square,
             hex_orientation: HexOrientation::Pointy,
+            group_gap: 0,
             // A 3×3 set: the lattice's position matters as much as the Snake's noise (measured
             // on the shared layers, 9 shifts found one-piece layouts 4 did not).
             shifts: [0.0, 0.33, 0.67]
@@ -126,6 +128,7 @@ pub enum Group {
     Snake,
     Outline,
     Cells,
+    Groups,
     Candidates,
     Refinement,
     Ranking,
@@ -138,6 +141,7 @@ impl Group {
             Group::Snake => "Snake",
             Group::Outline => "Outline",
             Group::Cells => "Cells",
+            Group::Groups => "Groups",
             Group::Candidates => "Candidates",
             Group::Refinement => "Refinement",
             Group::Ranking => "Ranking",
@@ -153,6 +157,7 @@ impl Group {
             }
             Group::Outline => "Outline and adjacency (method.md §1)",
             Group::Cells => "Cells: squares or hexagons (method.md §6, §10)",
+            Group::Groups => "Groups kept together (method.md §10; with a group field)",
             Group::Candidates => "Candidate layouts (method.md §7)",
             Group::Refinement => "Refinement after the assignment (method.md §6b)",
             Group::Ranking => "Ranking of the candidates (method.md §7)",
@@ -686,6 +691,21 @@ pub static PARAMETERS: &[Parameter] = &[
         ),
     },
     Parameter {
+        name: "group_gap",
+        kind: Kind::Integer { bits: 32 },
+        optional: false,
+        min: closed(0.0),
+        max: closed(1.0),
+        unit: "cells",
+        group: Group::Groups,
+        advanced: false,
+        summary: "Gap between groups",
+        help: "With a group field, the regions of each group form one block of cells on each \
+             landmass; 1 leaves an empty cell between the blocks of different groups (no cell of \
+             one touches a cell of another, not even at a corner), 0 packs them together.",
+        access: accessors!(group_gap, Integer),
+    },
+    Parameter {
         name: "shifts",
         kind: Kind::PairList { min: 1, max: 16 },
         optional: false,
@@ -1012,6 +1032,8 @@ pub fn markdown() -> String {
     let groups = [
         Group::Snake,
         Group::Outline,
+        Group::Cells,
+        Group::Groups,
         Group::Candidates,
         Group::Refinement,
         Group::Ranking,

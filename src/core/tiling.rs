@@ -129,6 +129,14 @@ impl Tiling {
         a != b && self.distance(a, b) <= 1
     }
 
+    /// The positions [`Tiling::touching`] `p`: its 8 neighbours for squares, 6 for hexagons.
+    pub fn touching_positions(self, p: Position) -> impl Iterator<Item = Position> {
+        let (c, r) = p;
+        self.half_neighbourhood()
+            .iter()
+            .flat_map(move |&(dc, dr)| [(c + dc, r + dr), (c - dc, r - dr)])
+    }
+
     /// Whether two positions share an edge.
     pub fn sharing_an_edge(self, a: Position, b: Position) -> bool {
         match self {

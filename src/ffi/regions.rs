@@ -87,6 +87,7 @@ pub unsafe extern "C" fn snakegrid_regions_add(
         list.regions.push(Region {
             id: id.to_owned(),
             geometry,
+            group: None,
         });
         Ok(())
     })
@@ -138,7 +139,51 @@ pub unsafe extern "C" fn snakegrid_regions_add_feature(
         let id = admission.admit(feature, id, kind)?;
         let geometry = crate::wkb::to_multi_polygon(wkb.unwrap_or_default()).map_err(named)?;
         list.admission = admission;
-        list.regions.push(Region { id, geometry });
+        list.regions.push(Region {
+            id,
+            geometry,
+            group: None,
+        });
+        Ok(())
+    })
+}
+
+/// Sets the group of region `index` (0 for the first added, in the order of addition), whose
+/// regions keep together in one block of cells per landmass (method.md §10; the parameter
+/// group_gap sets whether blocks of different groups may touch): a non-empty UTF-8 name, copied.
+/// `group` NULL clears it: a region without a group is a group of its own, and a map where no
+/// region has a group is laid out without groups. Only the names' equality counts: renaming
+/// every group moves no cell.
+///
+/// Fails with SNAKEGRID_INVALID_ARGUMENT for an index past the last region, or an empty name;
+/// the handle is then unchanged. Thread safety: not concurrently with any other use of the same
+/// handle.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_regions_set_group(
+    regions: *mut Regions,
+    index: usize,
+    group: *const c_char,
+) -> Status {
+    guard("snakegrid_regions_set_group", || {
+        // SAFETY: a live handle nobody else uses meanwhile (header contract).
+        let list = unsafe { handle::get_mut(regions, "regions") }?;
+        // SAFETY: NUL-terminated string or NULL (header contract).
+        let group = unsafe { handle::optional_text(group, "group") }?;
+        let count = list.regions.len();
+        let region = list.regions.get_mut(index).ok_or_else(|| {
+            Failure::new(
+                Status::INVALID_ARGUMENT,
+                format!("index {index}: there are {count} regions"),
+            )
+        })?;
+        if group == Some("") {
+            return Err(Failure::new(
+                Status::INVALID_ARGUMENT,
+                format!("region {}: the group name is empty", region.id),
+            ));
+        }
+        region.group = group.map(str::to_owned);
         Ok(())
     })
 }

@@ -5,8 +5,8 @@
 use super::handle::{self, Handle, Out};
 use super::status::{c_string, guard, guard_free, Failure, Status};
 use crate::core::{
-    hexjson, CandidateReport, GridMap, LayoutMetrics, RegionCell, RegionMetrics, SnakeReport,
-    StopReason,
+    hexjson, CandidateReport, GridMap, GroupMetrics, LayoutMetrics, RegionCell, RegionMetrics,
+    SnakeReport, StopReason,
 };
 use std::ffi::{c_char, CString};
 
@@ -351,6 +351,31 @@ pub unsafe extern "C" fn snakegrid_result_layout_metrics(
     unsafe {
         read("snakegrid_result_layout_metrics", result, out, |o| {
             Ok(o.map.metrics)
+        })
+    }
+}
+
+/// How the chosen layout keeps its groups (method.md §10): the regions were given groups
+/// (snakegrid_regions_set_group, or the dataset job's group_field).
+///
+/// Fails with SNAKEGRID_INVALID_ARGUMENT for a map laid out without groups.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_group_metrics(
+    result: *const RunResult,
+    out: *mut GroupMetrics,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_group_metrics", result, out, |o| {
+            o.map.groups.ok_or_else(|| {
+                Failure::new(
+                    Status::INVALID_ARGUMENT,
+                    "the map was laid out without groups (no region has a group)",
+                )
+            })
         })
     }
 }

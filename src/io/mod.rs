@@ -242,6 +242,7 @@ fn run_in(
             layer: &outcome.source_layer,
             where_clause: job.where_clause.as_deref(),
             id_field: id_field.map(|i| source_names[i].as_str()),
+            group_field: job.group_field.as_deref(),
             label_field: label_field.map(|i| source_names[i].as_str()),
             features: features.len(),
         };
@@ -453,6 +454,11 @@ impl<'l> Source<'l> {
             .as_deref()
             .map(|name| read::require_field(&fields, name, "-id"))
             .transpose()?;
+        let group_field = job
+            .group_field
+            .as_deref()
+            .map(|name| read::require_field(&fields, name, "-group"))
+            .transpose()?;
         let label_field = match job.label_field.as_deref() {
             Some(name) => Some(read::require_field(&fields, name, "-label")?),
             None => ["abbr", "name"]
@@ -472,7 +478,7 @@ impl<'l> Source<'l> {
             None => layer.spatial_ref().map(crs::traditional),
         };
         let features = read::features(session, layer, job.where_clause.as_deref())?;
-        let checked = read::check(&features, id_field, label_field)?;
+        let checked = read::check(&features, id_field, label_field, group_field)?;
         let plan = crs::plan(
             session,
             source_srs.as_ref(),

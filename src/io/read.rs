@@ -123,16 +123,19 @@ pub(crate) fn features<'l>(
 pub(crate) struct Checked {
     pub id: String,
     pub label: String,
+    /// Its group (`-group`); `None` when null or not asked for.
+    pub group: Option<String>,
     /// Polygon or multipolygon, flattened to 2D.
     pub geometry: Geometry,
 }
 
-/// Ids, labels and polygonal geometries of `features`; refuses null or duplicate ids and
-/// null, empty or non-polygonal geometries, naming the feature.
+/// Ids, labels, groups and polygonal geometries of `features`; refuses null or duplicate ids
+/// and null, empty or non-polygonal geometries, naming the feature.
 pub(crate) fn check(
     features: &[Feature],
     id_field: Option<usize>,
     label_field: Option<usize>,
+    group_field: Option<usize>,
 ) -> Result<Vec<Checked>, Error> {
     let mut seen: HashMap<String, String> = HashMap::new();
     features
@@ -168,9 +171,11 @@ pub(crate) fn check(
                 .and_then(|i| feature.field_as_string(i).ok().flatten())
                 .filter(|l| !l.trim().is_empty())
                 .unwrap_or_else(|| id.clone());
+            let group = group_field.and_then(|i| feature.field_as_string(i).ok().flatten());
             Ok(Checked {
                 id,
                 label,
+                group,
                 geometry,
             })
         })
@@ -267,6 +272,7 @@ pub(crate) fn regions(
             Ok(Region {
                 id: c.id.clone(),
                 geometry,
+                group: c.group.clone(),
             })
         })
         .collect()

@@ -3,7 +3,7 @@
 
 use super::{Job, Outcome};
 use crate::core::{
-    CandidateReport, CellLayout, Error, GridMap, LayoutMetrics, Params, SnakeReport,
+    CandidateReport, CellLayout, Error, GridMap, GroupMetrics, LayoutMetrics, Params, SnakeReport,
 };
 use geo::{BoundingRect, Coord};
 use serde::Serialize;
@@ -25,6 +25,8 @@ struct Report<'a> {
     cells: CellLayout,
     adjacent_pairs: usize,
     metrics: &'a LayoutMetrics,
+    /// How the layout keeps the groups (method.md §10); null without a group field.
+    groups: Option<&'a GroupMetrics>,
     snake: &'a SnakeReport,
     /// Every candidate layout, best (the one written) first.
     candidates: &'a [CandidateReport],
@@ -40,6 +42,8 @@ pub(crate) struct SourceInfo<'a> {
     pub where_clause: Option<&'a str>,
     /// The id field, or null for the feature ids.
     pub id_field: Option<&'a str>,
+    /// The group field (`-group`), or null.
+    pub group_field: Option<&'a str>,
     pub label_field: Option<&'a str>,
     pub features: usize,
 }
@@ -69,6 +73,8 @@ struct RegionRow<'a> {
     label: &'a str,
     col: i32,
     row: i32,
+    /// Its block (grid_group).
+    block: u32,
     /// In cells, after the fit (method.md §8).
     displacement: f64,
     neighbours_kept: f64,
@@ -105,6 +111,7 @@ pub(crate) fn json(
         cells: map.cell_layout(),
         adjacent_pairs: map.adjacency.len(),
         metrics: &map.metrics,
+        groups: map.groups.as_ref(),
         snake: &map.snake,
         candidates: &map.candidates,
         regions: rows(map, labels),
@@ -125,6 +132,7 @@ fn rows<'a>(map: &'a GridMap, labels: &'a [String]) -> Vec<RegionRow<'a>> {
             label,
             col: cell.col,
             row: cell.row,
+            block: cell.block,
             displacement: cell.metrics.displacement,
             neighbours_kept: cell.metrics.neighbours_kept,
             orientation_error: cell.metrics.orientation_error,
@@ -257,6 +265,20 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
         "layout: {} piece(s) (the regions: {}), {} hole(s), {} notch(es), wrong landmass {:.3}\n",
         m.pieces, m.source_pieces, m.holes, m.notches, m.wrong_landmass
     );
+    if let Some(g) = &map.groups {
+        text += &format!(
+            "groups: {} in {} block(s), {:.3} of the blocks whole, {:.3} of {} adjacent group \
+             pairs within {} cell(s), orientation {:.1}°, {} contact(s) between groups\n",
+            g.groups,
+            g.blocks,
+            g.whole,
+            g.adjacency,
+            g.group_pairs,
+            g.reach,
+            g.orientation,
+            g.contacts
+        );
+    }
     text += &format!(
         "snake: {} steps, stopped by {}, spread of neighbour distances {:.3} → {:.3} \
          (network of {} nodes, {} edges)\n",

@@ -629,6 +629,56 @@ static void test_hexagons(void) {
     snakegrid_regions_free(regions);
 }
 
+/* Groups (method.md §10): the west and east halves of the test map, a cell apart. */
+static void test_groups(void) {
+    snakegrid_regions *regions = make_regions();
+    CHECK_FAILS(snakegrid_regions_set_group(regions, REGIONS, "west"), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("24 regions");
+    CHECK_FAILS(snakegrid_regions_set_group(regions, 0, ""), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("empty");
+    /* Without groups there are no group metrics. */
+    snakegrid_options *options = make_options();
+    snakegrid_result *result = NULL;
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
+    snakegrid_group_metrics metrics;
+    CHECK_FAILS(snakegrid_result_group_metrics(result, &metrics), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("without groups");
+    snakegrid_result_free(result);
+    /* Regions are added row by row, column c at index r * COLS + c. */
+    for (int k = 0; k < REGIONS; k++) {
+        CHECK_OK(snakegrid_regions_set_group(regions, (size_t)k, k % COLS < COLS / 2 ? "west" : "east"));
+    }
+    CHECK_OK(snakegrid_options_set(options, "group_gap", "1"));
+    result = NULL;
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
+    if (result != NULL) {
+        CHECK_OK(snakegrid_result_group_metrics(result, &metrics));
+        CHECK(metrics.groups == 2 && metrics.blocks == 2 && metrics.group_pairs == 1);
+        CHECK(metrics.whole == 1.0 && metrics.adjacency == 1.0 && metrics.reach == 2);
+        CHECK(metrics.contacts == 0);
+        /* grid_group numbers the blocks 1 and 2, one per half. */
+        size_t field = snakegrid_field_count();
+        for (size_t f = 0; f < snakegrid_field_count(); f++) {
+            snakegrid_field info;
+            CHECK_OK(snakegrid_field_info(f, &info));
+            if (strcmp(info.name, "grid_group") == 0) field = f;
+        }
+        CHECK(field < snakegrid_field_count());
+        double west = 0.0, east = 0.0;
+        CHECK_OK(snakegrid_result_field(result, 0, field, &west));
+        CHECK_OK(snakegrid_result_field(result, COLS - 1, field, &east));
+        CHECK((west == 1.0 && east == 2.0) || (west == 2.0 && east == 1.0));
+        for (int k = 0; k < REGIONS; k++) {
+            double block = 0.0;
+            CHECK_OK(snakegrid_result_field(result, (size_t)k, field, &block));
+            CHECK(block == (k % COLS < COLS / 2 ? west : east));
+        }
+        snakegrid_result_free(result);
+    }
+    snakegrid_options_free(options);
+    snakegrid_regions_free(regions);
+}
+
 static void test_cancel(void) {
     snakegrid_options *options = make_options();
     snakegrid_regions *regions = make_regions();
@@ -772,6 +822,7 @@ int main(void) {
     test_invalid_input_runs();
     test_run();
     test_hexagons();
+    test_groups();
     test_cancel();
     test_score();
     test_threads();

@@ -151,7 +151,7 @@ pub fn lattice_offset(map: &GridMap, cell: &RegionCell) -> geo::Coord<f64> {
     }
 }
 
-/// `regions` with every id renamed and the features in another order.
+/// `regions` with every id and group renamed and the features in another order.
 pub fn renamed_and_shuffled(regions: &[Region]) -> Vec<Region> {
     let mut other: Vec<Region> = regions
         .iter()
@@ -160,6 +160,8 @@ pub fn renamed_and_shuffled(regions: &[Region]) -> Vec<Region> {
         .map(|(k, r)| Region {
             id: format!("z{:06}-{}", regions.len() - k, r.id),
             geometry: r.geometry.clone(),
+            // Groups renamed too: reversed names reorder them ("AL" and "LA" swap).
+            group: (r.group.as_ref()).map(|g| g.chars().rev().collect::<String>() + "-x"),
         })
         .collect();
     other.reverse();

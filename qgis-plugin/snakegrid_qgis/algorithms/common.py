@@ -126,11 +126,14 @@ class Features:
     The library checks each one (snakegrid.layout and .score), with the command line's
     messages."""
 
-    def __init__(self, source, id_field, feedback, progress_to):
+    def __init__(self, source, id_field, feedback, progress_to, group_field=None):
         self.crs = source.sourceCrs()
         self.fields = source.fields()
         id_index = self.fields.lookupField(id_field) if id_field else -1
+        group_index = self.fields.lookupField(group_field) if group_field else -1
         self.features, self.ids, self.labels, self.geometries = [], [], [], []
+        #: Each feature's group (None: NULL), or None without a group field.
+        self.groups = [] if group_index >= 0 else None
         total = max(source.featureCount(), 1)
         # The library checks and repairs geometries as the command line does (a bow-tie is
         # repaired with a note): QGIS's own validity check would refuse them first.
@@ -143,6 +146,8 @@ class Features:
             self.ids.append(
                 _id(feature.attribute(id_index)) if id_index >= 0 else str(feature.id()))
             self.labels.append(f"FID {feature.id()}")
+            if self.groups is not None:
+                self.groups.append(_id(feature.attribute(group_index)))
             geometry = feature.geometry()
             self.geometries.append(None if geometry.isNull() else geometry)
             feedback.setProgress(progress_to * (n + 1) / total)

@@ -9,6 +9,7 @@ from qgis.core import (
     QgsProcessing,
     QgsProcessingException,
     QgsProcessingLayerPostProcessorInterface,
+    QgsProcessingOutputNumber,
     QgsProcessingParameterCrs,
     QgsProcessingParameterFeatureSink,
     QgsProcessingParameterFeatureSource,
@@ -22,8 +23,19 @@ from qgis.PyQt.QtCore import QVariant
 from .. import library
 from . import common, parameters
 
-INPUT, ID_FIELD, LABEL_FIELD, TARGET_CRS, OUTPUT, OUTLINE, HEXJSON = (
-    "INPUT", "ID_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT", "OUTLINE", "HEXJSON")
+INPUT, ID_FIELD, GROUP_FIELD, LABEL_FIELD, TARGET_CRS, OUTPUT, OUTLINE, HEXJSON = (
+    "INPUT", "ID_FIELD", "GROUP_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT", "OUTLINE",
+    "HEXJSON")
+
+#: The group metrics (method.md section 10), numeric outputs of a run with a group field.
+GROUP_OUTPUTS = [
+    ("GROUPS_WHOLE", "Groups: share of blocks in one piece (higher is better)", "whole"),
+    ("GROUP_ADJACENCY", "Groups: share of neighbouring groups kept within reach (higher is "
+     "better)", "adjacency"),
+    ("GROUP_ORIENTATION", "Groups: mean direction error between groups, degrees (lower is "
+     "better)", "orientation"),
+    ("GROUP_CONTACTS", "Groups: touching cells of different groups (0 with a gap)", "contacts"),
+]
 
 ABOUT = """\
 Makes a grid map (tile map): one equal cell per region (squares, or hexagons with cell = hex), placed so that cells stay near \
@@ -35,7 +47,10 @@ to the moved outline and every region gets a cell by an optimal assignment, whic
 adjacency-aware refinement improves; several candidates (lattice shifts, noisy starts) are made \
 this way and ranked by their metrics.
 INPUT: polygons, any source QGIS reads (tick Selected features only to use a selection).
-ID_FIELD: unique region id (default: the feature id). LABEL_FIELD: a short name used to label \
+ID_FIELD: unique region id (default: the feature id). GROUP_FIELD (optional): the regions of \
+each group keep together, one block of cells per group on each landmass, the blocks placed like \
+the groups (a NULL value is a group of its own; the parameter group_gap 1 keeps blocks of \
+different groups a cell apart); grid_group numbers the blocks. LABEL_FIELD: a short name used to label \
 the cells when the output is loaded (default: abbr, else name, if present).
 TARGET_CRS: the working and output CRS, as the command line's -t_srs (default: the layer's CRS \
 when it is projected, else an equal-area CRS centred on the layer, chosen by the library).
@@ -114,6 +129,9 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
             ID_FIELD, "Id field (unique; default: the feature id)", parentLayerParameterName=INPUT,
             optional=True))
         self.addParameter(QgsProcessingParameterField(
+            GROUP_FIELD, "Group field (regions kept together; optional)",
+            parentLayerParameterName=INPUT, optional=True))
+        self.addParameter(QgsProcessingParameterField(
             LABEL_FIELD, "Short label field (default: abbr, else name)",
             parentLayerParameterName=INPUT, optional=True))
         self.addParameter(QgsProcessingParameterCrs(
@@ -130,6 +148,8 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
             HEXJSON, "HexJSON file (hexagonal cells only)", "HexJSON (*.hexjson *.json)",
             optional=True, createByDefault=False))
         common.add_layout_outputs(self)
+        for name, label, _ in GROUP_OUTPUTS:
+            self.addOutput(QgsProcessingOutputNumber(name, label))
 
     def checkParameterValues(self, parameters_, context):  # noqa: N802
         # The library refuses a bad value by name before any feature is read.
@@ -152,14 +172,16 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
         if source is None:
             raise QgsProcessingException(self.invalidSourceError(parameters_, INPUT))
         id_field = self.parameterAsString(parameters_, ID_FIELD, context)
+        group_field = self.parameterAsString(parameters_, GROUP_FIELD, context)
         label_field = self.parameterAsString(parameters_, LABEL_FIELD, context)
         target = self.parameterAsCrs(parameters_, TARGET_CRS, context)
         options = parameters.values(self, self.options, parameters_, context)
 
         feedback.setProgressText("reading the layer")
-        features = common.Features(source, id_field, feedback, 10.0)
+        features = common.Features(source, id_field, feedback, 10.0, group_field)
         crs = common.working_crs(sg, features, target, feedback)
         grid = sg.layout(features.wkb(crs, context), features.ids, labels=features.labels,
+                         groups=features.groups,
                          progress=common.Progress(feedback, 10.0, 95.0), **options)
         for note in grid.notes:
             feedback.pushWarning(note)
@@ -210,4 +232,8 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
         feedback.pushInfo(f"{len(grid.cells)} cells of {grid.cell_size:.6g} map units in "
                           f"{crs.description() or 'planar coordinates'}.")
         results.update(common.layout_results(grid.metrics, feedback))
+        if grid.group_metrics is not None:
+            for name, label, attribute in GROUP_OUTPUTS:
+                results[name] = getattr(grid.group_metrics, attribute)
+                feedback.pushInfo(f"{label}: {results[name]:.4f}")
         return results
