@@ -251,12 +251,20 @@ fn a_region_without_a_group_is_a_group_of_its_own() {
         .position(|r| r.group.as_deref() == Some("NC"))
         .unwrap();
     regions[loner].group = None;
+    // A blank name is no name either.
+    let blank = regions
+        .iter()
+        .rposition(|r| r.group.as_deref() == Some("SC"))
+        .unwrap();
+    regions[blank].group = Some("  ".into());
     let map = run(&regions, &with(&[("group_gap", "1")]));
     let g = map.groups.unwrap();
-    assert_eq!(g.groups, 3);
+    assert_eq!(g.groups, 4);
     assert_eq!(g.contacts, 0);
-    let block = map.cells[loner].block;
-    assert_eq!(map.cells.iter().filter(|c| c.block == block).count(), 1);
+    for region in [loner, blank] {
+        let block = map.cells[region].block;
+        assert_eq!(map.cells.iter().filter(|c| c.block == block).count(), 1);
+    }
     // Without any group there are no group metrics, and a block per landmass at most.
     for r in regions.iter_mut() {
         r.group = None;

@@ -54,7 +54,7 @@ struct Cli {
     #[arg(long = "id", value_name = "FIELD", allow_hyphen_values = true)]
     id: Option<String>,
     /// Field whose regions keep together: one block of cells per group on each landmass (a
-    /// null value is a group of its own region; see group_gap)
+    /// null or blank value is a group of its own region; see group_gap)
     #[arg(long = "group", value_name = "FIELD", allow_hyphen_values = true)]
     group: Option<String>,
     /// Working and output CRS, any definition GDAL accepts [default: the source CRS; a geographic

@@ -601,7 +601,11 @@ fn blocks_of(
                 return Some(0);
             }
             let next = names.len();
-            let group = regions[i].group.as_deref()?;
+            // A blank name is no name: a group of its own, as a null is.
+            let group = regions[i]
+                .group
+                .as_deref()
+                .filter(|g| !g.trim().is_empty())?;
             Some(*names.entry(group).or_insert(next))
         })
         .collect();

@@ -48,8 +48,8 @@ pub use score::score;
 pub struct Region {
     pub id: String,
     pub geometry: MultiPolygon<f64>,
-    /// Its group's name; `None`: a group of its own. A layer where no region has a group is
-    /// laid out without groups.
+    /// Its group's name; `None` or a blank name: a group of its own. A layer where no region
+    /// has a group (not even a blank one) is laid out without groups.
     pub group: Option<String>,
 }
 

@@ -150,13 +150,13 @@ pub unsafe extern "C" fn snakegrid_regions_add_feature(
 
 /// Sets the group of region `index` (0 for the first added, in the order of addition), whose
 /// regions keep together in one block of cells per landmass (method.md §10; the parameter
-/// group_gap sets whether blocks of different groups may touch): a non-empty UTF-8 name, copied.
-/// `group` NULL clears it: a region without a group is a group of its own, and a map where no
-/// region has a group is laid out without groups. Only the names' equality counts: renaming
-/// every group moves no cell.
+/// group_gap sets whether blocks of different groups may touch): a UTF-8 name, copied; a blank
+/// name, like a null value in a layer, makes the region a group of its own. `group` NULL clears
+/// it: a map where no region has a group is laid out without groups. Only the names' equality
+/// counts: renaming every group moves no cell.
 ///
-/// Fails with SNAKEGRID_INVALID_ARGUMENT for an index past the last region, or an empty name;
-/// the handle is then unchanged. Thread safety: not concurrently with any other use of the same
+/// Fails with SNAKEGRID_INVALID_ARGUMENT for an index past the last region; the handle is then
+/// unchanged. Thread safety: not concurrently with any other use of the same
 /// handle.
 #[must_use]
 #[no_mangle]
@@ -177,12 +177,6 @@ pub unsafe extern "C" fn snakegrid_regions_set_group(
                 format!("index {index}: there are {count} regions"),
             )
         })?;
-        if group == Some("") {
-            return Err(Failure::new(
-                Status::INVALID_ARGUMENT,
-                format!("region {}: the group name is empty", region.id),
-            ));
-        }
         region.group = group.map(str::to_owned);
         Ok(())
     })

@@ -49,7 +49,7 @@ this way and ranked by their metrics.
 INPUT: polygons, any source QGIS reads (tick Selected features only to use a selection).
 ID_FIELD: unique region id (default: the feature id). GROUP_FIELD (optional): the regions of \
 each group keep together, one block of cells per group on each landmass, the blocks placed like \
-the groups (a NULL value is a group of its own; the parameter group_gap 1 keeps blocks of \
+the groups (a NULL or blank value is a group of its own; the parameter group_gap 1 keeps blocks of \
 different groups a cell apart); grid_group numbers the blocks. LABEL_FIELD: a short name used to label \
 the cells when the output is loaded (default: abbr, else name, if present).
 TARGET_CRS: the working and output CRS, as the command line's -t_srs (default: the layer's CRS \
