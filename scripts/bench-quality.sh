@@ -96,6 +96,13 @@ print("\t".join(["us_counties", variant, "%.1f" % float(seconds)] + [
     echo "quality: us_counties $variant done" >&2
 done
 
+# The tab-separated rows of file $1 as Markdown table rows.
+markdown_rows() {
+    while IFS=$'\t' read -r -a cells; do
+        printf '| %s |\n' "$(IFS='|'; echo "${cells[*]}" | sed 's/|/ | /g')"
+    done < "$1"
+}
+
 {
     echo "# Quality"
     echo
@@ -119,9 +126,7 @@ done
     echo
     echo "| layer | run | time s | adj 8 | adj 4 | false | orient ° | > 45° | location | p90 | max | shape | pieces | holes | notches | wrong land |"
     echo "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    while IFS=$'\t' read -r -a cells; do
-        printf '| %s |\n' "$(IFS='|'; echo "${cells[*]}" | sed 's/|/ | /g')"
-    done < "$rows"
+    markdown_rows "$rows"
     echo
     echo "## Groups (\`-group state_abbr\`, issue 17)"
     echo
@@ -133,9 +138,7 @@ done
     echo
     echo "| layer | run | time s | adj 8 | orient ° | location | shape | pieces | holes | blocks whole | groups near | reach | group orient ° | contacts |"
     echo "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    while IFS=$'\t' read -r -a cells; do
-        printf '| %s |\n' "$(IFS='|'; echo "${cells[*]}" | sed 's/|/ | /g')"
-    done < "$grouped"
+    markdown_rows "$grouped"
     echo
     echo "## Other tools, by the same judge (issue 13; adjacency 8-nbr / orientation / location / shape)"
     echo
