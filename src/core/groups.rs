@@ -691,7 +691,7 @@ fn transport(options: &[Vec<(usize, f64)>], demand: &[usize]) -> Vec<usize> {
         for &(taker, taker_cost) in &options[x] {
             if taker != giver {
                 let key = taker_cost - cost(x, giver);
-                (hand_over[taker].entry(giver).or_default()).push(Reverse(Offer { key, cell: x }));
+                (hand_over[taker].entry(giver).or_default()).push(Reverse((Key(key), x)));
             }
         }
     };
@@ -726,18 +726,18 @@ fn transport(options: &[Vec<(usize, f64)>], demand: &[usize]) -> Vec<usize> {
             for (&giver, heap) in hand_over[taker].iter_mut() {
                 while heap
                     .peek()
-                    .is_some_and(|Reverse(o)| holder[o.cell] != giver)
+                    .is_some_and(|&Reverse((_, cell))| holder[cell] != giver)
                 {
                     heap.pop();
                 }
-                let Some(Reverse(best)) = heap.peek() else {
+                let Some(&Reverse((Key(key), cell))) = heap.peek() else {
                     continue;
                 };
-                let reduced = (best.key - potential[taker] + potential[giver]).max(0.0);
+                let reduced = (key - potential[taker] + potential[giver]).max(0.0);
                 let through = d + reduced;
                 if through < distance[giver] {
                     distance[giver] = through;
-                    via[giver] = Some((taker, best.cell));
+                    via[giver] = Some((taker, cell));
                     queue.push(Reverse((Key(through), giver)));
                 }
             }
@@ -763,33 +763,11 @@ fn transport(options: &[Vec<(usize, f64)>], demand: &[usize]) -> Vec<usize> {
     holder
 }
 
-/// A cell `cell` one block may take from another, at `key` more than it costs its holder.
-#[derive(Clone, Copy, Debug)]
-struct Offer {
-    key: f64,
-    cell: usize,
-}
+/// A cell one block may take from another (its index, second) and how much more it costs the
+/// taker than its holder (first): heaps order by the cost, then the cell.
+type Offer = (Key, usize);
 
-impl PartialEq for Offer {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-impl Eq for Offer {}
-impl PartialOrd for Offer {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Offer {
-    fn cmp(&self, other: &Self) -> Ordering {
-        self.key
-            .total_cmp(&other.key)
-            .then(self.cell.cmp(&other.cell))
-    }
-}
-
-/// A distance, totally ordered.
+/// A cost or distance, totally ordered.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Key(f64);
 impl Eq for Key {}
