@@ -44,6 +44,12 @@
 #endif
 
 /**
+ * How far, in cells, a cell's centre may lie from the position its numbers name and still
+ * count as where the layout put it (the re-layout issue's figure).
+ */
+#define snakegrid_MOVED_BEYOND 0.25
+
+/**
  * The side a of a hexagon of area 1: 3√3/2 · a² = 1 (constants, since the refinement asks for
  * them with every pair it weighs; a test checks them).
  */
@@ -501,6 +507,25 @@ typedef struct snakegrid_candidate {
 } snakegrid_candidate;
 
 /**
+ * The pin an edited cell gives its region (snakegrid_edit_pins). `repr(C)`.
+ */
+typedef struct snakegrid_edit_pin {
+  /**
+   * Whether the region is pinned: the user moved its cell, or ticked it to keep.
+   */
+  bool pinned;
+  /**
+   * Whether the user moved the cell (more than a quarter cell from its position).
+   */
+  bool moved;
+  /**
+   * Where the cell now lies: pass to snakegrid_regions_set_pin when `pinned`.
+   */
+  int32_t col;
+  int32_t row;
+} snakegrid_edit_pin;
+
+/**
  * One added field of a grid layer. Its strings are static.
  */
 typedef struct snakegrid_field {
@@ -696,6 +721,25 @@ snakegrid_status snakegrid_regions_set_group(struct snakegrid_regions *regions,
                                              const char *group);
 
 /**
+ * Pins region `index` (0 for the first added) to the cell at column `col`, row `row` (method.md
+ * §10): offset coordinates as the grid layer numbers them, rows from the top (for hexagons the
+ * odd rows (pointy) or columns (flat) sit half a cell further). Whole numbers given as doubles,
+ * so that a host passes a layer's integer or real values as they are; both NaN unpins the
+ * region. With pins, every cell is numbered in the pins' frame and the pinned regions keep
+ * theirs.
+ *
+ * Fails with SNAKEGRID_INVALID_ARGUMENT for an index past the last region, a value that is not
+ * a whole number, or only one of the two NaN; the handle is then unchanged. Two regions on one
+ * cell are refused by snakegrid_run, naming both. Thread safety: not concurrently with any
+ * other use of the same handle.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_regions_set_pin(struct snakegrid_regions *regions,
+                                           size_t index,
+                                           double col,
+                                           double row);
+
+/**
  * Makes an empty job (no source, no destination, no overwrite, no update) and writes it to
  * `*out`.
  *
@@ -719,6 +763,9 @@ void snakegrid_job_free(struct snakegrid_job *job);
  * - "id_field": field holding the unique region id (default: the feature id);
  * - "group_field": field whose regions keep together, one block of cells per group on each
  *   landmass (default: no groups; a null value is a group of its own region);
+ * - "pin_col_field", "pin_row_field": fields holding each pinned region's cell, column and row
+ *   (whole numbers; null: free), both or neither; with pins, grid_col and grid_row are
+ *   numbered in the pins' frame (method.md §10);
  * - "dst": destination dataset path; required;
  * - "format": GDAL driver short name (default: from the extension, else GPKG);
  * - "layer_name": output layer name (default: the source layer's);
@@ -986,6 +1033,32 @@ snakegrid_status snakegrid_score(const struct snakegrid_regions *regions,
                                  struct snakegrid_layout_metrics *layout,
                                  struct snakegrid_region_metrics *region_metrics,
                                  size_t region_metrics_len);
+
+/**
+ * Reads an edited grid layer for a re-layout: `cells` holds the layer's cells (one polygon
+ * each, under its region's id, in any planar CRS), `q` and `r` each cell's grid_q and grid_r
+ * as written (for squares, grid_col and grid_row), `keep` (NULL: none) whether the user ticked
+ * it to keep, all `count` long in the order of `cells`; `options` gives the cell shape. A cell
+ * whose centre lies more than a quarter cell from the position q, r name was moved: its new
+ * position is the nearest one on the lattice that the unmoved cells lie on. Writes per cell
+ * to `out[k]` whether it is pinned (moved or kept) and where: set those pins on the source
+ * regions (snakegrid_regions_set_pin) and run again, and the rest is laid out around them.
+ * For hexagons the columns and rows written are in snakegrid's pinned convention (odd rows or
+ * columns shifted), which is the layer's own when it shifted the odd ones.
+ *
+ * Fails with SNAKEGRID_INVALID_INPUT, naming both ids, when two cells lie on one position, and
+ * naming the id for a cell that is not one polygon or has no area; SNAKEGRID_INVALID_ARGUMENT
+ * when `count` is not the number of cells. `out` is written only on success. Thread safety:
+ * the handles are only read.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_edit_pins(const struct snakegrid_regions *cells,
+                                     const int32_t *q,
+                                     const int32_t *r,
+                                     const bool *keep,
+                                     size_t count,
+                                     const struct snakegrid_options *options,
+                                     struct snakegrid_edit_pin *out);
 
 /**
  * Chooses the working CRS for a layer in longitude and latitude (degrees) from its regions'

@@ -14,6 +14,10 @@ pub struct Job {
     pub id_field: Option<String>,
     /// Field whose regions keep together (`-group`, method.md §10); no groups when `None`.
     pub group_field: Option<String>,
+    /// Fields holding each pinned region's cell, column and row (`-pin_col`, `-pin_row`,
+    /// method.md §10): whole numbers, null for a free region. Both or neither.
+    pub pin_col_field: Option<String>,
+    pub pin_row_field: Option<String>,
     /// Destination dataset path.
     pub dst: String,
     /// GDAL driver short name (`-f`); guessed from the extension, else GeoPackage, when `None`.

@@ -23,7 +23,7 @@ pub mod io;
 pub mod job;
 pub mod wkb;
 
-pub use crate::core::{crs, diagnostics, fields, hexjson, input, params, tiling};
+pub use crate::core::{crs, diagnostics, fields, hexjson, input, params, pins, tiling};
 pub use crate::core::{
     generate, score, CandidateReport, CellLayout, Error, GridMap, GroupMetrics, HexOrientation,
     LayoutMetrics, LoadModel, Params, Progress, Region, RegionCell, RegionMetrics, SnakeReport,

@@ -267,6 +267,7 @@ fn coordinates_out_of_proportion_are_refused_by_name() {
         id: "needle".into(),
         geometry: snakegrid::wkb::to_multi_polygon(&bytes).unwrap(),
         group: None,
+        pin: None,
     };
     let error = generate(&[needle], &Params::default(), &|_, _| true).unwrap_err();
     assert!(
@@ -292,6 +293,7 @@ fn regions_whose_union_or_outline_is_empty_are_refused_by_name() {
             id: "sliver".into(),
             geometry: snakegrid::wkb::to_multi_polygon(&bytes).unwrap(),
             group: None,
+            pin: None,
         };
         let error = generate(&[region], &Params::default(), &|_, _| true).unwrap_err();
         assert!(

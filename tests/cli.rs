@@ -1069,3 +1069,108 @@ fn a_group_field_keeps_groups_together_and_is_reported() {
         "-group \"nope\": the source layer has no such field",
     );
 }
+
+/// us_states with pin fields `pc` and `pr` (text, as a CSV source would have them) set from
+/// `pins` (abbr → column, row text).
+fn pinned_states(to: &Path, pins: &[(&str, (&str, &str))]) {
+    let input = Dataset::open(data("us_states")).unwrap();
+    let mut source = input.layer(0).unwrap();
+    let srs = source.spatial_ref().unwrap();
+    let mut output = DriverManager::get_driver_by_name("GPKG")
+        .unwrap()
+        .create_vector_only(to)
+        .unwrap();
+    let layer = output
+        .create_layer(LayerOptions {
+            name: "us_states",
+            srs: Some(&srs),
+            ..Default::default()
+        })
+        .unwrap();
+    let fields = [
+        ("abbr", OGRFieldType::OFTString),
+        ("pc", OGRFieldType::OFTString),
+    ];
+    layer.create_defn_fields(&fields).unwrap();
+    layer
+        .create_defn_fields(&[("pr", OGRFieldType::OFTReal)])
+        .unwrap();
+    for f in source.features() {
+        let abbr = text(f.field(2).unwrap());
+        let mut feature = Feature::new(layer.defn()).unwrap();
+        feature.set_field_string(0, &abbr).unwrap();
+        if let Some((_, (col, row))) = pins.iter().find(|(a, _)| *a == abbr) {
+            feature.set_field_string(1, col).unwrap();
+            if !row.is_empty() {
+                feature.set_field_double(2, row.parse().unwrap()).unwrap();
+            }
+        }
+        feature.set_geometry(f.geometry().unwrap().clone()).unwrap();
+        feature.create(&layer).unwrap();
+    }
+}
+
+#[test]
+fn pin_fields_number_the_cells_in_the_pins_frame() {
+    let scratch = Scratch::new("pins");
+    let src = scratch.path("pinned.gpkg");
+    // Issue 18's NYT cells, given as text and real values.
+    let nyt = [
+        ("WA", ("1", "2")),
+        ("FL", ("7", "7")),
+        ("ME", ("11", "0")),
+        ("CA", ("0", "4")),
+        ("TX", ("3", "6")),
+    ];
+    pinned_states(&src, &nyt);
+    let (grid, report) = (scratch.path("g.gpkg"), scratch.path("g.json"));
+    let args = ["-id", "abbr", "-pin_col", "pc", "-pin_row", "pr", "-json"];
+    let mut all: Vec<&str> = args.to_vec();
+    all.extend([p(&report), p(&grid), p(&src)]);
+    let out = snakegrid(all);
+    assert_success(&out);
+    let (_, rows) = read_rows(&grid);
+    for (abbr, (col, row)) in nyt {
+        let cell = rows.iter().find(|r| r.fields["abbr"] == abbr).unwrap();
+        assert_eq!(
+            (
+                cell.fields["grid_col"].as_str(),
+                cell.fields["grid_row"].as_str()
+            ),
+            (col, row)
+        );
+    }
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(report["source"]["pin_col_field"], "pc");
+
+    // Refused by name before the layout: a value that is not whole, one of the two missing.
+    for (pins, message) in [
+        (
+            ("2.5", "1"),
+            "feature WA: the pin column 2.5 is not a whole number",
+        ),
+        (
+            ("2", ""),
+            "feature WA: the pin column is set but the pin row is not",
+        ),
+        (
+            ("two", "1"),
+            "feature WA: the pin value \"two\" is not a number",
+        ),
+    ] {
+        let bad = scratch.path("bad.gpkg");
+        let _ = std::fs::remove_file(&bad);
+        pinned_states(&bad, &[("WA", pins)]);
+        let out = scratch.path("bad-out.gpkg");
+        let mut all: Vec<&str> = vec!["-q"];
+        all.extend(&args[..6]);
+        all.extend([p(&out), p(&bad)]);
+        assert_fails(&snakegrid(all), 1, message);
+        assert!(!out.exists());
+    }
+    // Only one of the two options: a usage error.
+    let out = snakegrid(["-q", "-pin_col", "pc", p(&scratch.path("x.gpkg")), p(&src)]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("pin_row"), "{}", stderr(&out));
+}

@@ -386,6 +386,7 @@ fn densified(regions: &[Region], pieces: usize) -> Vec<Region> {
                     .collect(),
             ),
             group: region.group.clone(),
+            pin: region.pin,
         })
         .collect()
 }

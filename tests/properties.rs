@@ -69,6 +69,7 @@ fn voronoi(points: &[Coord<f64>]) -> Vec<Region> {
                 id: format!("v{i}"),
                 geometry: MultiPolygon(vec![Polygon::new(LineString(cell), vec![])]),
                 group: None,
+                pin: None,
             }
         })
         .collect()

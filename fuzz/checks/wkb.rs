@@ -12,6 +12,7 @@ pub fn check(bytes: &[u8]) {
             id: "fuzz".into(),
             geometry,
             group: None,
+            pin: None,
         };
         // Only the input checks: a run with no Snake steps, one shift, no noise, no refinement
         // is cheap, and it must end in a grid map or an error, not a panic.

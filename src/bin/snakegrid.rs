@@ -57,6 +57,25 @@ struct Cli {
     /// null or blank value is a group of its own region; see group_gap)
     #[arg(long = "group", value_name = "FIELD", allow_hyphen_values = true)]
     group: Option<String>,
+
+    /// Field with the column of each pinned region's cell (whole numbers; null: free). With
+    /// pins, grid_col and grid_row are numbered in the pins' frame
+    #[arg(
+        long = "pin_col",
+        value_name = "FIELD",
+        allow_hyphen_values = true,
+        requires = "pin_row"
+    )]
+    pin_col: Option<String>,
+
+    /// Field with the row of each pinned region's cell, from the top (see -pin_col)
+    #[arg(
+        long = "pin_row",
+        value_name = "FIELD",
+        allow_hyphen_values = true,
+        requires = "pin_col"
+    )]
+    pin_row: Option<String>,
     /// Working and output CRS, any definition GDAL accepts [default: the source CRS; a geographic
     /// source is projected to Lambert azimuthal equal-area centred on the layer]
     #[arg(long = "t_srs", value_name = "CRS", allow_hyphen_values = true)]
@@ -365,6 +384,8 @@ fn main() -> ExitCode {
         where_clause: cli.where_clause,
         id_field: cli.id,
         group_field: cli.group,
+        pin_col_field: cli.pin_col,
+        pin_row_field: cli.pin_row,
         dst: cli.dst,
         format: cli.format,
         layer_name: cli.nln,

@@ -4,15 +4,16 @@
 //! regions or their ids, because everything works on the regions in a geometric order.
 
 use super::frame::Frame;
-use super::grid::{self, Lattice};
+use super::grid::{self, Lattice, LatticeCell};
 use super::groups;
 use super::landmass;
 use super::metrics::{self, Scored};
 use super::network::{self, Network};
 use super::outline::{self, Prepared};
 use super::params::HexOrientation;
+use super::pins;
 use super::snake::{self, SnakeRun};
-use super::tiling::Tiling;
+use super::tiling::{Position, Tiling};
 use super::validity::{self, Problem};
 use super::{
     assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params, Progress,
@@ -23,6 +24,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
@@ -103,14 +105,34 @@ fn generate_here(
         prepared,
         mut notes,
     } = Input::of(regions, params, progress)?;
+    let grouped = regions.iter().any(|r| r.group.is_some());
+    let blocks = blocks_of(regions, &order, &prepared, grouped);
+    let gap = grouped && params.group_gap > 0;
+    let tiling = Tiling::of(params);
+    let pins = pins::positions(regions, &order, tiling, grouped.then_some(&blocks), gap)?;
+    let pins: Vec<(usize, Position)> = (pins.into_iter().enumerate())
+        .filter_map(|(i, p)| Some((i, p?)))
+        .collect();
     let base = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
 
     let mut levels = params.snake_noise_levels();
-    let jobs = layout_jobs(
+    let mut jobs = layout_jobs(
         levels.len(),
         &params.shifts,
         params.layout_count(regions.len()),
     );
+    if !pins.is_empty() {
+        // Pins place the lattice: there is no origin to shift, and each shift's layout is
+        // another start of the refinement (its own seed) instead.
+        notes.push(format!(
+            "{} pinned regions place the lattice; the candidate shifts are not used, each \
+             stands for another start of the refinement",
+            pins.len()
+        ));
+        for job in &mut jobs {
+            job.1 = [0.0, 0.0];
+        }
+    }
     let pairs = levels.len() * params.shifts.len();
     if jobs.len() < pairs {
         notes.push(format!(
@@ -161,10 +183,10 @@ fn generate_here(
         })
         .collect::<Result<Vec<_>, Error>>()?;
 
-    let grouped = regions.iter().any(|r| r.group.is_some());
     let context = Context {
-        blocks: blocks_of(regions, &order, &prepared, grouped),
+        blocks,
         grouped,
+        pins,
         prepared: &prepared,
         frame,
         reference: metrics::Reference::new(&prepared, frame),
@@ -617,6 +639,8 @@ struct Context<'a> {
     /// Each region's block, and whether the layer has groups at all.
     blocks: groups::Blocks,
     grouped: bool,
+    /// The pinned regions and their positions, by region.
+    pins: Vec<(usize, Position)>,
     prepared: &'a Prepared,
     frame: Frame,
     /// What the layouts are scored against.
@@ -638,13 +662,9 @@ impl Context<'_> {
         report: &dyn Fn(Stage, f64) -> bool,
     ) -> Result<Layout, Error> {
         let m = network.centroids;
-        let moved = &run.positions[..m];
-        let moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
-        // One multipolygon per part of the outline: polygons_of keeps the parts' order.
-        let parts: Vec<MultiPolygon<f64>> = (moved_outline.0.iter())
-            .map(|p| MultiPolygon(vec![p.clone()]))
-            .collect();
-        let mut demands = vec![0; parts.len()];
+        let mut moved: Cow<[Coord<f64>]> = Cow::Borrowed(&run.positions[..m]);
+        let mut moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
+        let mut demands = vec![0; moved_outline.0.len()];
         for &p in &self.blocks.of {
             let p = self.blocks.landmass[p];
             // A part the moved outline lost (a ring collapsed by the Snake) has no cells.
@@ -655,12 +675,47 @@ impl Context<'_> {
         // Gaps between groups take cells of their own, which the lattice's cell size counts.
         let gap = self.grouped && self.params.group_gap > 0;
         if gap {
-            demands = groups::cells_with_gaps(&self.blocks, parts.len());
+            demands = groups::cells_with_gaps(&self.blocks, demands.len());
         }
         let wanted: usize = demands.iter().sum();
-        let mut lattice = grid::frame(&moved_outline, wanted, shift, Tiling::of(self.params));
-        let selection = landmass::select(&lattice, &parts, &demands, self.params.refine_cell_ratio);
+        let tiling = Tiling::of(self.params);
+        let mut lattice = if self.pins.is_empty() {
+            grid::frame(&moved_outline, wanted, shift, tiling)
+        } else {
+            let pinned: Vec<(Position, Coord<f64>)> =
+                self.pins.iter().map(|&(i, p)| (p, moved[i])).collect();
+            // The rest follows the pins: the moved network bent so that each pinned region's
+            // centroid lies on its cell.
+            let (lattice, warp) = pins::place(&moved_outline, wanted, &pinned, tiling);
+            moved = Cow::Owned(moved.iter().map(|&c| warp.at(c)).collect());
+            moved_outline = geo::MapCoords::map_coords(&moved_outline, |c| warp.at(c));
+            lattice
+        };
+        let moved: &[Coord<f64>] = &moved;
+        // One multipolygon per part of the outline: polygons_of keeps the parts' order.
+        let parts: Vec<MultiPolygon<f64>> = (moved_outline.0.iter())
+            .map(|p| MultiPolygon(vec![p.clone()]))
+            .collect();
+        // The pinned regions' cells come first, in the order of `self.pins`.
+        let fixed: Vec<LatticeCell> = (self.pins.iter())
+            .map(|&(i, (col, row))| LatticeCell {
+                col,
+                row,
+                score: 0.0,
+                part: self.blocks.landmass[self.blocks.of[i]],
+            })
+            .collect();
+        let selection = landmass::select(
+            &lattice,
+            &parts,
+            &demands,
+            self.params.refine_cell_ratio,
+            &fixed,
+        );
         lattice.cells = selection.cells;
+        if !self.pins.is_empty() {
+            pins::bridge(&mut lattice.cells, fixed.len(), selection.assigned, tiling);
+        }
         if selection.assigned != wanted {
             return Err(Error::Internal(format!(
                 "the lattice has {} cells for {wanted}",
@@ -672,7 +727,9 @@ impl Context<'_> {
                 // Without gaps the blocks share out exactly the landmasses' cells.
                 lattice.cells.truncate(selection.assigned);
             }
-            groups::assign(&mut lattice, &self.blocks, moved, gap, &|done| {
+            let pinned: FxHashMap<Position, usize> =
+                self.pins.iter().map(|&(i, p)| (p, i)).collect();
+            groups::assign(&mut lattice, &self.blocks, moved, gap, &pinned, &|done| {
                 report(Stage::Assigning, done)
             })
             .ok_or(Error::Cancelled)?
@@ -686,9 +743,17 @@ impl Context<'_> {
             adjacency: &self.prepared.adjacency,
             misplaced: self.home.any_counted().then_some(&misplaced),
         };
-        landmass::settle(&mut lattice, &cells, &homes, self.params);
+        let anchored = |of: &dyn Fn(usize) -> usize| {
+            let mut anchored: Vec<usize> = self.pins.iter().map(|&(i, _)| of(i)).collect();
+            anchored.sort_unstable();
+            anchored.dedup();
+            anchored
+        };
+        let parts_pinned = anchored(&|i| lattice.cells[cells[i]].part);
+        landmass::settle(&mut lattice, &cells, &homes, self.params, &parts_pinned);
         if self.grouped {
-            groups::dock(&mut lattice, &self.blocks, area, gap);
+            let blocks_pinned = anchored(&|i| self.blocks.of[i]);
+            groups::dock(&mut lattice, &self.blocks, area, gap, &blocks_pinned);
         }
         if self.params.refine {
             cells = self.refine(&lattice, &cells, seed, report)?;
@@ -715,7 +780,8 @@ impl Context<'_> {
     }
 
     /// Each landmass's regions assigned among its own cells (method.md §6), the first `m` of
-    /// `lattice.cells`: per region, an index into them.
+    /// `lattice.cells`: per region, an index into them. The pinned regions take the first
+    /// cells, one each, in the order of `self.pins`.
     fn assign(
         &self,
         lattice: &mut Lattice,
@@ -727,9 +793,17 @@ impl Context<'_> {
         let part_of = &self.prepared.part_of;
         debug_assert!((0..m).all(|i| self.blocks.landmass[self.blocks.of[i]] == part_of[i]));
         let mut cells = vec![0; m];
+        let mut free = vec![true; m];
+        for (k, &(i, _)) in self.pins.iter().enumerate() {
+            cells[i] = k;
+            free[i] = false;
+        }
+        let pinned = self.pins.len();
         for part in 0..parts {
-            let regions: Vec<usize> = (0..m).filter(|&i| part_of[i] == part).collect();
-            let own: Vec<usize> = (0..m).filter(|&k| lattice.cells[k].part == part).collect();
+            let regions: Vec<usize> = (0..m).filter(|&i| free[i] && part_of[i] == part).collect();
+            let own: Vec<usize> = (pinned..m)
+                .filter(|&k| lattice.cells[k].part == part)
+                .collect();
             let points: Vec<Coord<f64>> = regions.iter().map(|&i| moved[i]).collect();
             let centres: Vec<Coord<f64>> = (own.iter())
                 .map(|&k| lattice.centre(lattice.cells[k].col, lattice.cells[k].row))
@@ -769,17 +843,27 @@ impl Context<'_> {
         };
         // With groups, a region only swaps cells within its block, so every block keeps its
         // patch: the refinement sees the blocks as its landmasses, and no free cells.
-        let by_block;
-        let (lattice, part_of) = if self.grouped {
-            let mut tagged = lattice.clone();
+        let mut tagged = lattice.clone();
+        let mut part_of = if self.grouped {
             for (cell, &block) in tagged.cells.iter_mut().zip(&self.blocks.of) {
                 cell.part = block;
             }
-            by_block = tagged;
-            (&by_block, &self.blocks.of)
+            self.blocks.of.clone()
         } else {
-            (lattice, &self.prepared.part_of)
+            self.prepared.part_of.clone()
         };
+        // A pinned region is a landmass of its own with one cell: nothing swaps with it and it
+        // has no free cell to move to.
+        let parts = part_of
+            .iter()
+            .chain(tagged.cells.iter().map(|c| &c.part))
+            .max();
+        let first_own = parts.map_or(0, |&p| p + 1);
+        for (k, &(i, _)) in self.pins.iter().enumerate() {
+            part_of[i] = first_own + k;
+            tagged.cells[cells[i]].part = first_own + k;
+        }
+        let (lattice, part_of) = (&tagged, &part_of);
         let layout = refine::Layout {
             adjacency: &self.prepared.adjacency,
             centroids: area,
@@ -822,7 +906,8 @@ impl Context<'_> {
     }
 
     /// The chosen layout in the input order and in map units, columns and rows counted from the
-    /// top-left used cell (for hexagons, offset columns and rows: [`Tiling::offset_coordinates`]).
+    /// top-left used cell, or with pins in the pins' frame (for hexagons, offset columns and
+    /// rows: [`Tiling::offset_coordinates`]).
     fn grid_map(
         &self,
         regions: &[Region],
@@ -840,8 +925,12 @@ impl Context<'_> {
         let used: Vec<(i32, i32)> = (positions.iter())
             .map(|&p| lattice.tiling.offset_coordinates(p))
             .collect();
-        let col0 = used.iter().map(|c| c.0).min().unwrap_or(0);
-        let row0 = used.iter().map(|c| c.1).min().unwrap_or(0);
+        // With pins, the pins' own frame; else from the top-left used cell.
+        let from = |pick: fn(&(i32, i32)) -> i32| match self.pins.is_empty() {
+            true => used.iter().map(pick).min().unwrap_or(0),
+            false => 0,
+        };
+        let (col0, row0) = (from(|c| c.0), from(|c| c.1));
         // Axial positions from the one at offset column 0, row 0.
         let reference = lattice.tiling.from_offset_coordinates((col0, row0));
         // Blocks numbered by their top row, then their leftmost column in it.

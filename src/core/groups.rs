@@ -114,8 +114,14 @@ const DOCK_REACH: i32 = 8;
 /// to the nearest shift (within [`DOCK_REACH`] cells of that place) whose cells are free, touch
 /// no other group's cells with `gap`, and, for hexagons, share no edge with another landmass
 /// (see `landmass::keeps_landmasses_apart`); it stays if none is nearer than where it is.
-/// `lattice.cells[i]` is region i's cell.
-pub fn dock(lattice: &mut Lattice, blocks: &Blocks, places: &[Coord<f64>], gap: bool) {
+/// `lattice.cells[i]` is region i's cell. A block holding a pinned cell (`anchored`) stays.
+pub fn dock(
+    lattice: &mut Lattice,
+    blocks: &Blocks,
+    places: &[Coord<f64>],
+    gap: bool,
+    anchored: &[usize],
+) {
     let count = blocks.count();
     let members = blocks.members();
     let landmasses = blocks.landmass.iter().map(|&p| p + 1).max().unwrap_or(0);
@@ -139,7 +145,7 @@ pub fn dock(lattice: &mut Lattice, blocks: &Blocks, places: &[Coord<f64>], gap: 
     let (scale, _) = super::metrics::fit(&centres, places);
     let tiling = lattice.tiling;
     let apart = super::landmass::keeps_landmasses_apart(tiling);
-    for b in 0..count {
+    for b in (0..count).filter(|b| !anchored.contains(b)) {
         let Some(main) = largest[blocks.group[b]].filter(|&l| l != b) else {
             continue;
         };
@@ -213,12 +219,15 @@ fn moat_guess(k: usize) -> usize {
 /// `gap`, patches of different groups keep a cell apart, which needs more cells than regions:
 /// `lattice.cells` then holds spare cells too. On return `lattice.cells` holds exactly the
 /// regions' cells, in region order; the result gives each region's index into them (the
-/// identity). `None` when `tick` stops it.
+/// identity). A pinned region (`pinned`: position → region, each position among
+/// `lattice.cells`) keeps its position, which its block's patch always holds. `None` when
+/// `tick` stops it.
 pub fn assign(
     lattice: &mut Lattice,
     blocks: &Blocks,
     points: &[Coord<f64>],
     gap: bool,
+    pinned: &FxHashMap<Position, usize>,
     tick: Tick,
 ) -> Option<Vec<usize>> {
     let m = points.len();
@@ -241,12 +250,17 @@ pub fn assign(
         let centres: Vec<Coord<f64>> = (own.iter())
             .map(|&b| mean(members[b].iter().map(|&i| points[i])))
             .collect();
+        let local: FxHashMap<usize, usize> = own.iter().enumerate().map(|(k, &b)| (b, k)).collect();
+        let fixed: FxHashMap<Position, usize> = (pinned.iter())
+            .filter_map(|(&p, &i)| Some((p, *local.get(&blocks.of[i])?)))
+            .collect();
         let split = Split {
             lattice,
             cells: &cells,
             centres: &centres,
             demand: &demand,
             gap: gap && own.len() > 1,
+            fixed: &fixed,
         };
         // Shaped territories pulled a cell apart lose their way (us_counties: 0.81 of the
         // neighbouring states within 2 cells, against 0.84 with convex patches): the spare
@@ -261,8 +275,6 @@ pub fn assign(
             let moved: Vec<Coord<f64>> = regions.iter().map(|&i| points[i]).collect();
             let work = share(regions.len());
             let choice = assign::assign(&moved, &at, &|done| tick(done * work))?;
-            let local: FxHashMap<usize, usize> =
-                own.iter().enumerate().map(|(k, &b)| (b, k)).collect();
             let territory: FxHashMap<Position, usize> = (regions.iter().zip(choice))
                 .map(|(&i, k)| (cells[k], local[&blocks.of[i]]))
                 .collect();
@@ -283,10 +295,39 @@ pub fn assign(
             patches[own[k]] = patch;
         }
     }
-    // Each block's regions among its patch's cells.
+    // Each block's pinned regions on their pins, the others among its patch's other cells.
     let mut placed: Vec<Position> = vec![(0, 0); m];
-    for (b, regions) in members.iter().enumerate() {
-        let patch = &patches[b];
+    for (&p, &i) in pinned {
+        placed[i] = p;
+    }
+    let pinned_regions: FxHashSet<usize> = pinned.values().copied().collect();
+    for (b, members) in members.iter().enumerate() {
+        let regions: Vec<usize> = (members.iter().copied())
+            .filter(|i| !pinned_regions.contains(i))
+            .collect();
+        let mut patch: Vec<Position> = (patches[b].iter().copied())
+            .filter(|p| !pinned.contains_key(p))
+            .collect();
+        if patch.len() != regions.len() {
+            // A patch that could not keep a pin (a moat took it) has a cell too many or too
+            // few for its free regions: the farthest from their centre go, the nearest free
+            // positions come.
+            let centre = mean(regions.iter().map(|&i| points[i]));
+            let far = |p: &Position| {
+                let c = lattice.centre(p.0, p.1) - centre;
+                c.x * c.x + c.y * c.y
+            };
+            patch.sort_by(|a, b| far(a).total_cmp(&far(b)).then(a.cmp(b)));
+            patch.truncate(regions.len());
+            while patch.len() < regions.len() {
+                let taken = |p: Position| {
+                    pinned.contains_key(&p)
+                        || patch.contains(&p)
+                        || patches.iter().any(|other| other.contains(&p))
+                };
+                patch.push(nearest_free(lattice, centre, |p| !taken(p)));
+            }
+        }
         let at: Vec<Coord<f64>> = patch.iter().map(|&(c, r)| lattice.centre(c, r)).collect();
         let own: Vec<Coord<f64>> = regions.iter().map(|&i| points[i]).collect();
         let work = share(regions.len());
@@ -347,6 +388,8 @@ struct Split<'a> {
     demand: &'a [usize],
     /// Whether patches of different blocks keep a cell apart.
     gap: bool,
+    /// The pinned positions, each with its block: always its block's, never a moat.
+    fixed: &'a FxHashMap<Position, usize>,
 }
 
 impl Split<'_> {
@@ -360,7 +403,13 @@ impl Split<'_> {
             for patch in kept.iter_mut() {
                 *patch = pieces_of(self.lattice.tiling, patch).swap_remove(0);
             }
-            settle_sizes(self.lattice, &mut kept, self.centres, self.demand);
+            settle_sizes(
+                self.lattice,
+                &mut kept,
+                self.centres,
+                self.demand,
+                self.fixed,
+            );
         }
         kept
     }
@@ -399,6 +448,9 @@ impl Split<'_> {
             let used = total.min(cells.len());
             let options: Vec<Vec<(usize, f64)>> = (0..used)
                 .map(|x| {
+                    if let Some(&b) = self.fixed.get(&cells[x]) {
+                        return vec![(b, 0.0)];
+                    }
                     let all = match &territory {
                         Some(t) => {
                             near_territories(t, cells[x], || nearest_centres(self.centres, at[x]))
@@ -422,6 +474,7 @@ impl Split<'_> {
             for (k, &h) in holder.iter().enumerate() {
                 claimed[h].push(cells[k]);
                 let moat = self.gap
+                    && !self.fixed.contains_key(&cells[k])
                     && (tiling.touching_positions(cells[k])).any(|n| {
                         (index.get(&n))
                             .is_some_and(|&j| holder.get(j).is_some_and(|&o| yields(h, o)))
@@ -535,7 +588,7 @@ fn shrink_to_fit(sizes: &mut [usize], demand: &[usize], mut over: usize) {
 }
 
 /// Trims patches with too many cells (farthest from their centre first, never splitting the
-/// patch) and grows those with too few into the free positions nearest their centre that touch
+/// patch, never a `fixed` one) and grows those with too few into the free positions nearest their centre that touch
 /// no other patch and extend it, else that touch no other patch, so that each has exactly its
 /// demand.
 fn settle_sizes(
@@ -543,6 +596,7 @@ fn settle_sizes(
     kept: &mut [Vec<Position>],
     centres: &[Coord<f64>],
     demand: &[usize],
+    fixed: &FxHashMap<Position, usize>,
 ) {
     let tiling = lattice.tiling;
     let distance = |b: usize, p: Position| {
@@ -552,7 +606,12 @@ fn settle_sizes(
     for b in 0..kept.len() {
         while kept[b].len() > demand[b] {
             let patch = &kept[b];
-            let mut order: Vec<usize> = (0..patch.len()).collect();
+            let mut order: Vec<usize> = (0..patch.len())
+                .filter(|&k| !fixed.contains_key(&patch[k]))
+                .collect();
+            if order.is_empty() {
+                break;
+            }
             order.sort_by(|&x, &y| distance(b, patch[y]).total_cmp(&distance(b, patch[x])));
             let drop = (order.iter().copied())
                 .find(|&k| {
@@ -619,7 +678,7 @@ fn nearest_free(
 
 /// The edge-connected pieces of `cells`, largest first (then by their first cell's place in
 /// `cells`); at least one, empty for no cells.
-fn pieces_of(tiling: Tiling, cells: &[Position]) -> Vec<Vec<Position>> {
+pub(crate) fn pieces_of(tiling: Tiling, cells: &[Position]) -> Vec<Vec<Position>> {
     let all: FxHashSet<Position> = cells.iter().copied().collect();
     let mut seen: FxHashSet<Position> = FxHashSet::default();
     let mut pieces: Vec<Vec<Position>> = Vec::new();

@@ -26,7 +26,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 use std::collections::HashMap;
 
 /// The cells the layout may use, tagged with their part: the first `demands.iter().sum()` are
-/// the cells to assign (each part's k), the rest the refinement's pool.
+/// the cells to assign (each part's k; the fixed cells first), the rest the refinement's pool.
 pub struct Selection {
     pub cells: Vec<LatticeCell>,
     pub assigned: usize,
@@ -34,11 +34,14 @@ pub struct Selection {
 
 /// Selects cells on `lattice` (its frame: size and origin) for the moved outline's `parts` (one
 /// multipolygon per part), part `p` holding `demands[p]` regions; `ratio` ≥ 1 sizes the pool.
+/// The `fixed` cells (pinned regions', at distinct positions) are taken first, each counting
+/// towards its part's demand wherever it lies: pins override the budgets.
 pub fn select(
     lattice: &Lattice,
     parts: &[MultiPolygon<f64>],
     demands: &[usize],
     ratio: f64,
+    fixed: &[LatticeCell],
 ) -> Selection {
     let scored: Vec<LatticeCell> = {
         let mut all: Vec<LatticeCell> = (parts.iter().enumerate())
@@ -50,10 +53,16 @@ pub fn select(
         all
     };
     // Every position handed out, with its part.
-    let mut taken: HashMap<Position, usize> = HashMap::new();
+    let mut taken: HashMap<Position, usize> =
+        fixed.iter().map(|c| ((c.col, c.row), c.part)).collect();
+    let mut open = demands.to_vec();
+    for cell in fixed {
+        open[cell.part] = open[cell.part].saturating_sub(1);
+    }
     // Indexed only if a part falls short, and then once for both picks.
     let outlines = std::cell::OnceCell::new();
-    let assigned = pick(lattice, parts, &outlines, &scored, demands, &mut taken);
+    let mut assigned = fixed.to_vec();
+    assigned.extend(pick(lattice, parts, &outlines, &scored, &open, &mut taken));
     let extra: Vec<usize> = demands
         .iter()
         // Less a hair, so that 1.3 × 10 (13.000000000000002 in binary) asks for 3 more, not 4.
@@ -286,8 +295,15 @@ pub struct Homes<'a> {
 /// block's pairs with other blocks; then the lowest row and column shift. It moves only if that
 /// is better than staying. The part with the most regions stays (the lowest index among
 /// equals); the others go largest first. A block's assignment stays optimal: translating all
-/// its cells adds the same to every assignment's cost.
-pub fn settle(lattice: &mut Lattice, cells: &[usize], homes: &Homes, params: &Params) {
+/// its cells adds the same to every assignment's cost. With pins, the parts holding a pinned
+/// cell (`anchored`) stay instead, and only the others move.
+pub fn settle(
+    lattice: &mut Lattice,
+    cells: &[usize],
+    homes: &Homes,
+    params: &Params,
+    anchored: &[usize],
+) {
     let parts = lattice.cells.iter().map(|c| c.part + 1).max().unwrap_or(0);
     if parts < 2 {
         // One block: the fit's shift already puts it where it belongs.
@@ -300,8 +316,12 @@ pub fn settle(lattice: &mut Lattice, cells: &[usize], homes: &Homes, params: &Pa
     let mut order: Vec<usize> = (0..parts).filter(|&p| !regions_of[p].is_empty()).collect();
     order.sort_by_key(|&p| (std::cmp::Reverse(regions_of[p].len()), p));
     // The largest part stays where the Snake put it: the fit has no fixed origin, so moving it
-    // would only do what moving all the others the other way does.
-    order.remove(0);
+    // would only do what moving all the others the other way does. Pins fix the origin.
+    if anchored.is_empty() {
+        order.remove(0);
+    } else {
+        order.retain(|p| !anchored.contains(p));
+    }
     let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); cells.len()];
     for &(i, j) in homes.adjacency.iter().filter(|(i, j)| i != j) {
         neighbours[i].push(j);
@@ -622,7 +642,7 @@ mod tests {
         let small = rectangle(20.0, 0.0, 22.0, 2.0);
         let all = MultiPolygon(big.0.iter().chain(&small.0).cloned().collect());
         let lattice = frame(&all, 10, [0.0, 0.0], Tiling::Square);
-        let selection = select(&lattice, &[big.clone(), small.clone()], &[1, 9], 1.0);
+        let selection = select(&lattice, &[big.clone(), small.clone()], &[1, 9], 1.0, &[]);
         assert_eq!(selection.assigned, 10);
         assert_eq!(selection.cells.len(), 10);
         let of = |p: usize| selection.cells.iter().filter(|c| c.part == p).count();
@@ -655,7 +675,7 @@ mod tests {
         lattice.cell_size = 1.0;
         let mut demands = vec![1; 25];
         demands[0] = 40;
-        let selection = select(&lattice, &parts, &demands, 1.0);
+        let selection = select(&lattice, &parts, &demands, 1.0, &[]);
         assert_eq!(selection.cells.len(), 64);
         let distinct: HashSet<(i32, i32)> =
             selection.cells.iter().map(|c| (c.col, c.row)).collect();
@@ -673,7 +693,7 @@ mod tests {
     fn the_pool_adds_free_cells_of_each_part() {
         let land = rectangle(0.0, 0.0, 4.0, 4.0);
         let lattice = frame(&land, 16, [0.0, 0.0], Tiling::Square);
-        let selection = select(&lattice, &[land], &[10], 1.3);
+        let selection = select(&lattice, &[land], &[10], 1.3, &[]);
         assert_eq!(selection.assigned, 10);
         assert_eq!(selection.cells.len(), 13);
         let distinct: HashSet<(i32, i32)> =
@@ -732,7 +752,7 @@ mod tests {
             adjacency,
             misplaced,
         };
-        settle(&mut lattice, &cells, &homes, &Params::default());
+        settle(&mut lattice, &cells, &homes, &Params::default(), &[]);
         lattice
     }
 
@@ -843,7 +863,7 @@ mod tests {
         for orientation in [HexOrientation::Pointy, HexOrientation::Flat] {
             let tiling = Tiling::Hex(orientation);
             let lattice = frame(&all, 65, [0.0, 0.0], tiling);
-            let selection = select(&lattice, &[big.clone(), small.clone()], &[64, 1], 1.0);
+            let selection = select(&lattice, &[big.clone(), small.clone()], &[64, 1], 1.0, &[]);
             let island: Vec<Position> = (selection.cells.iter())
                 .filter(|c| c.part == 1)
                 .map(|c| (c.col, c.row))

@@ -28,6 +28,7 @@ mod network;
 mod outline;
 mod overlay;
 pub mod params;
+pub mod pins;
 mod rank;
 mod refine;
 mod score;
@@ -51,6 +52,10 @@ pub struct Region {
     /// Its group's name; `None` or a blank name: a group of its own. A layer where no region
     /// has a group (not even a blank one) is laid out without groups.
     pub group: Option<String>,
+    /// The cell it must take (method.md §10, pinned cells): its offset column and row, as the
+    /// grid layer numbers them (rows from the top; [`tiling::Tiling::offset_coordinates`]).
+    /// The other cells are numbered in the same frame.
+    pub pin: Option<(i32, i32)>,
 }
 
 /// Why a run failed. `InvalidInput` names the offending feature when there is one.

@@ -21,7 +21,7 @@ impl Handle for DatasetJob {
 
 /// The settings snakegrid_job_set() knows, each with the command-line option it mirrors.
 const SETTINGS: &str = "src (SRC), src_layer (SRC_LAYER), where (-where), id_field (-id), \
-    group_field (-group), dst (DST), format (-f), layer_name (-nln), s_srs (-s_srs), target_srs (-t_srs), \
+    group_field (-group), pin_col_field (-pin_col), pin_row_field (-pin_row), dst (DST), format (-f), layer_name (-nln), s_srs (-s_srs), target_srs (-t_srs), \
     json_report (-json), svg (-svg), hexjson (-hexjson), label_field (-label), lco (-lco), dsco (-dsco)";
 
 /// Makes an empty job (no source, no destination, no overwrite, no update) and writes it to
@@ -56,6 +56,9 @@ pub unsafe extern "C" fn snakegrid_job_free(job: *mut DatasetJob) {
 /// - "id_field": field holding the unique region id (default: the feature id);
 /// - "group_field": field whose regions keep together, one block of cells per group on each
 ///   landmass (default: no groups; a null value is a group of its own region);
+/// - "pin_col_field", "pin_row_field": fields holding each pinned region's cell, column and row
+///   (whole numbers; null: free), both or neither; with pins, grid_col and grid_row are
+///   numbered in the pins' frame (method.md §10);
 /// - "dst": destination dataset path; required;
 /// - "format": GDAL driver short name (default: from the extension, else GPKG);
 /// - "layer_name": output layer name (default: the source layer's);
@@ -121,6 +124,8 @@ fn optional_setting<'a>(job: &'a mut Job, name: &str) -> Result<&'a mut Option<S
         "where" => &mut job.where_clause,
         "id_field" => &mut job.id_field,
         "group_field" => &mut job.group_field,
+        "pin_col_field" => &mut job.pin_col_field,
+        "pin_row_field" => &mut job.pin_row_field,
         "format" => &mut job.format,
         "layer_name" => &mut job.layer_name,
         "s_srs" => &mut job.source_srs,

@@ -13,6 +13,7 @@
 //! - [`run`]: the two entry points and the progress callback;
 //! - [`result`]: reading a finished run;
 //! - [`score`]: scoring a layout made elsewhere;
+//! - [`edits`]: the pins a hand-edited grid layer gives, for a re-layout;
 //! - [`crs`]: the working-CRS rule, for hosts that project layers themselves;
 //! - [`fields`]: the fields a grid layer adds, for hosts that write layers themselves.
 //!
@@ -40,6 +41,8 @@ pub mod run;
 pub mod result;
 
 pub mod score;
+
+pub mod edits;
 
 pub mod crs;
 
@@ -78,6 +81,7 @@ mod tests {
             include_str!("run.rs"),
             include_str!("result.rs"),
             include_str!("score.rs"),
+            include_str!("edits.rs"),
             include_str!("crs.rs"),
             include_str!("fields.rs"),
         ];
@@ -96,6 +100,6 @@ mod tests {
             }
         }
         // handle.rs exports nothing; the count catches a module left out of the list above.
-        assert_eq!(exports, 48);
+        assert_eq!(exports, 50);
     }
 }

@@ -88,6 +88,7 @@ pub unsafe extern "C" fn snakegrid_regions_add(
             id: id.to_owned(),
             geometry,
             group: None,
+            pin: None,
         });
         Ok(())
     })
@@ -143,6 +144,7 @@ pub unsafe extern "C" fn snakegrid_regions_add_feature(
             id,
             geometry,
             group: None,
+            pin: None,
         });
         Ok(())
     })
@@ -178,6 +180,46 @@ pub unsafe extern "C" fn snakegrid_regions_set_group(
             )
         })?;
         region.group = group.map(str::to_owned);
+        Ok(())
+    })
+}
+
+/// Pins region `index` (0 for the first added) to the cell at column `col`, row `row` (method.md
+/// §10): offset coordinates as the grid layer numbers them, rows from the top (for hexagons the
+/// odd rows (pointy) or columns (flat) sit half a cell further). Whole numbers given as doubles,
+/// so that a host passes a layer's integer or real values as they are; both NaN unpins the
+/// region. With pins, every cell is numbered in the pins' frame and the pinned regions keep
+/// theirs.
+///
+/// Fails with SNAKEGRID_INVALID_ARGUMENT for an index past the last region, a value that is not
+/// a whole number, or only one of the two NaN; the handle is then unchanged. Two regions on one
+/// cell are refused by snakegrid_run, naming both. Thread safety: not concurrently with any
+/// other use of the same handle.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_regions_set_pin(
+    regions: *mut Regions,
+    index: usize,
+    col: f64,
+    row: f64,
+) -> Status {
+    guard("snakegrid_regions_set_pin", || {
+        // SAFETY: a live handle nobody else uses meanwhile (header contract).
+        let list = unsafe { handle::get_mut(regions, "regions") }?;
+        let count = list.regions.len();
+        let region = list.regions.get_mut(index).ok_or_else(|| {
+            Failure::new(
+                Status::INVALID_ARGUMENT,
+                format!("index {index}: there are {count} regions"),
+            )
+        })?;
+        let pin = crate::pins::pin_of(Some(col), Some(row)).map_err(|message| {
+            Failure::new(
+                Status::INVALID_ARGUMENT,
+                format!("feature {}: {message}", region.id),
+            )
+        })?;
+        region.pin = pin;
         Ok(())
     })
 }

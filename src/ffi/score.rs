@@ -117,6 +117,7 @@ mod tests {
                 polygon![(x: x, y: 0.0), (x: x + 1.0, y: 0.0), (x: x + 1.0, y: 1.0), (x: x, y: 1.0)],
             ]),
             group: None,
+            pin: None,
         }
     }
 

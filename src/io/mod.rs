@@ -243,6 +243,8 @@ fn run_in(
             where_clause: job.where_clause.as_deref(),
             id_field: id_field.map(|i| source_names[i].as_str()),
             group_field: job.group_field.as_deref(),
+            pin_col_field: job.pin_col_field.as_deref(),
+            pin_row_field: job.pin_row_field.as_deref(),
             label_field: label_field.map(|i| source_names[i].as_str()),
             features: features.len(),
         };
@@ -478,7 +480,25 @@ impl<'l> Source<'l> {
             None => layer.spatial_ref().map(crs::traditional),
         };
         let features = read::features(session, layer, job.where_clause.as_deref())?;
-        let checked = read::check(&features, id_field, label_field, group_field)?;
+        let pin = match (job.pin_col_field.as_deref(), job.pin_row_field.as_deref()) {
+            (Some(col), Some(row)) => Some((
+                read::require_field(&fields, col, "-pin_col")?,
+                read::require_field(&fields, row, "-pin_row")?,
+            )),
+            (None, None) => None,
+            _ => {
+                return Err(Error::InvalidParameter(
+                    "-pin_col and -pin_row go together: name both fields or neither".into(),
+                ))
+            }
+        };
+        let setting_fields = read::SettingFields {
+            id: id_field,
+            label: label_field,
+            group: group_field,
+            pin,
+        };
+        let checked = read::check(&features, &setting_fields)?;
         let plan = crs::plan(
             session,
             source_srs.as_ref(),

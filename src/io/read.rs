@@ -5,7 +5,7 @@ use super::session::Session;
 use crate::core::{Error, Region};
 use crate::crs::LonLatBox;
 use gdal::spatial_ref::CoordTransform;
-use gdal::vector::{Feature, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
+use gdal::vector::{Feature, FieldValue, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
 use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
 use geo::{CoordsIter, MultiPolygon};
 use std::collections::HashMap;
@@ -125,18 +125,26 @@ pub(crate) struct Checked {
     pub label: String,
     /// Its group (`-group`); `None` when null or not asked for.
     pub group: Option<String>,
+    /// Its pin (`-pin_col`, `-pin_row`); `None` when both are null or not asked for.
+    pub pin: Option<(i32, i32)>,
     /// Polygon or multipolygon, flattened to 2D.
     pub geometry: Geometry,
 }
 
-/// Ids, labels, groups and polygonal geometries of `features`; refuses null or duplicate ids
-/// and null, empty or non-polygonal geometries, naming the feature.
-pub(crate) fn check(
-    features: &[Feature],
-    id_field: Option<usize>,
-    label_field: Option<usize>,
-    group_field: Option<usize>,
-) -> Result<Vec<Checked>, Error> {
+/// The fields a feature's settings come from, as indices into the layer's fields.
+pub(crate) struct SettingFields {
+    pub id: Option<usize>,
+    pub label: Option<usize>,
+    pub group: Option<usize>,
+    /// The pin's column and row fields.
+    pub pin: Option<(usize, usize)>,
+}
+
+/// Ids, labels, groups, pins and polygonal geometries of `features`; refuses null or duplicate
+/// ids, pins that are not whole numbers or given by halves ([`crate::pins::pin_of`]) and null,
+/// empty or non-polygonal geometries, naming the feature.
+pub(crate) fn check(features: &[Feature], fields: &SettingFields) -> Result<Vec<Checked>, Error> {
+    let (id_field, label_field, group_field) = (fields.id, fields.label, fields.group);
     let mut seen: HashMap<String, String> = HashMap::new();
     features
         .iter()
@@ -172,14 +180,38 @@ pub(crate) fn check(
                 .filter(|l| !l.trim().is_empty())
                 .unwrap_or_else(|| id.clone());
             let group = group_field.and_then(|i| feature.field_as_string(i).ok().flatten());
+            let pin = match fields.pin {
+                Some((col, row)) => {
+                    let value = |i| number(feature, i).map_err(|m| Error::input(Some(&id), m));
+                    crate::pins::pin_of(value(col)?, value(row)?)
+                        .map_err(|m| Error::input(Some(&id), m))?
+                }
+                None => None,
+            };
             Ok(Checked {
                 id,
                 label,
                 group,
+                pin,
                 geometry,
             })
         })
         .collect()
+}
+
+/// Field `index` of `feature` as a number: `None` when null or blank; a text field's value
+/// parsed (a CSV source has only text).
+fn number(feature: &Feature, index: usize) -> Result<Option<f64>, String> {
+    match feature.field(index) {
+        Ok(None) => Ok(None),
+        Ok(Some(FieldValue::IntegerValue(v))) => Ok(Some(f64::from(v))),
+        Ok(Some(FieldValue::Integer64Value(v))) => Ok(Some(v as f64)),
+        Ok(Some(FieldValue::RealValue(v))) => Ok(Some(v)),
+        Ok(Some(FieldValue::StringValue(text))) if text.trim().is_empty() => Ok(None),
+        Ok(Some(FieldValue::StringValue(text))) => (text.trim().parse::<f64>().map(Some))
+            .map_err(|_| format!("the pin value {text:?} is not a number")),
+        Ok(Some(_)) | Err(_) => Err("the pin field holds no number".into()),
+    }
 }
 
 /// A copy of `geometry` flattened to 2D when it is a non-empty (multi)polygon.
@@ -273,6 +305,7 @@ pub(crate) fn regions(
                 id: c.id.clone(),
                 geometry,
                 group: c.group.clone(),
+                pin: c.pin,
             })
         })
         .collect()

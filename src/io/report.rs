@@ -44,6 +44,9 @@ pub(crate) struct SourceInfo<'a> {
     pub id_field: Option<&'a str>,
     /// The group field (`-group`), or null.
     pub group_field: Option<&'a str>,
+    /// The pin fields (`-pin_col`, `-pin_row`), or null.
+    pub pin_col_field: Option<&'a str>,
+    pub pin_row_field: Option<&'a str>,
     pub label_field: Option<&'a str>,
     pub features: usize,
 }

@@ -677,6 +677,124 @@ static void test_groups(void) {
     snakegrid_regions_free(regions);
 }
 
+/* The index of the added field `name`. */
+static size_t field_named(const char *name) {
+    for (size_t f = 0; f < snakegrid_field_count(); f++) {
+        snakegrid_field info;
+        CHECK_OK(snakegrid_field_info(f, &info));
+        if (strcmp(info.name, name) == 0) return f;
+    }
+    CHECK(0);
+    return 0;
+}
+
+static double cell_field(const snakegrid_result *result, size_t region, const char *name) {
+    double value = NAN;
+    CHECK_OK(snakegrid_result_field(result, region, field_named(name), &value));
+    return value;
+}
+
+/* Pins (method.md §10): two regions keep their cells, in a frame of the caller's choosing. */
+static void test_pins(void) {
+    snakegrid_regions *regions = make_regions();
+    CHECK_FAILS(snakegrid_regions_set_pin(regions, REGIONS, 0, 0), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("24 regions");
+    CHECK_FAILS(snakegrid_regions_set_pin(regions, 0, 2.5, 0), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("feature r00: the pin column 2.5 is not a whole number");
+    CHECK_FAILS(snakegrid_regions_set_pin(regions, 0, 1, NAN), SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("the pin row is not");
+    /* r00 (the south-west corner) and r10 east of it, at negative columns. */
+    CHECK_OK(snakegrid_regions_set_pin(regions, 0, -5, 9));
+    CHECK_OK(snakegrid_regions_set_pin(regions, 1, -4, 9));
+    snakegrid_options *options = make_options();
+    snakegrid_result *result = NULL;
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
+    if (result != NULL) {
+        CHECK(cell_field(result, 0, "grid_col") == -5 && cell_field(result, 0, "grid_row") == 9);
+        CHECK(cell_field(result, 1, "grid_col") == -4 && cell_field(result, 1, "grid_row") == 9);
+        snakegrid_result_free(result);
+    }
+    /* Two regions on one cell: refused, naming both. */
+    CHECK_OK(snakegrid_regions_set_pin(regions, 1, -5, 9));
+    result = NULL;
+    CHECK_FAILS(snakegrid_run(regions, options, NULL, NULL, &result), SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("feature r10");
+    CHECK_MESSAGE_HAS("feature r00");
+    CHECK(result == NULL);
+    snakegrid_options_free(options);
+    snakegrid_regions_free(regions);
+}
+
+static void set_f64_le(uint8_t *p, double v) {
+    uint64_t bits;
+    memcpy(&bits, &v, sizeof v);
+    for (int i = 0; i < 8; i++) p[i] = (uint8_t)(bits >> (8 * i));
+}
+
+/* The cells of `result` in its order as a regions handle, cell `moved` shifted by (dx, dy)
+ * cells (its WKB is a little-endian polygon of one ring of 5 points). */
+static snakegrid_regions *edited_cells(const snakegrid_result *result, size_t moved, double dx,
+                                       double dy) {
+    snakegrid_regions *cells = NULL;
+    double size = 0.0;
+    CHECK_OK(snakegrid_regions_new(&cells));
+    CHECK_OK(snakegrid_result_cell_size(result, &size));
+    for (size_t k = 0; k < REGIONS; k++) {
+        const char *id = NULL;
+        const uint8_t *wkb = NULL;
+        size_t len = 0;
+        CHECK_OK(snakegrid_result_region_id(result, k, &id));
+        CHECK_OK(snakegrid_result_cell_wkb(result, k, &wkb, &len));
+        uint8_t copy[128];
+        CHECK(len <= sizeof copy);
+        memcpy(copy, wkb, len);
+        for (int point = 0; k == moved && point < 5; point++) {
+            uint8_t *xy = copy + 13 + 16 * point;
+            set_f64_le(xy, get_f64_le(xy) + dx * size);
+            set_f64_le(xy + 8, get_f64_le(xy + 8) + dy * size);
+        }
+        CHECK_OK(snakegrid_regions_add(cells, id, copy, len));
+    }
+    return cells;
+}
+
+/* Re-layout after hand edits: the moved cell and the kept one are pinned where they lie. */
+static void test_edit_pins(void) {
+    snakegrid_regions *regions = make_regions();
+    snakegrid_options *options = make_options();
+    snakegrid_result *result = NULL;
+    CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
+    if (result == NULL) return;
+    int32_t q[REGIONS], r[REGIONS];
+    bool keep[REGIONS] = {false};
+    for (size_t k = 0; k < REGIONS; k++) {
+        q[k] = (int32_t)cell_field(result, k, "grid_q");
+        r[k] = (int32_t)cell_field(result, k, "grid_r");
+    }
+    keep[1] = true;
+    /* r00 dragged three cells west, off the map: moved, to column − 3. */
+    snakegrid_regions *cells = edited_cells(result, 0, -3.0, 0.0);
+    snakegrid_edit_pin out[REGIONS];
+    CHECK_OK(snakegrid_edit_pins(cells, q, r, keep, REGIONS, options, out));
+    CHECK(out[0].pinned && out[0].moved && out[0].col == q[0] - 3 && out[0].row == r[0]);
+    CHECK(out[1].pinned && !out[1].moved && out[1].col == q[1] && out[1].row == r[1]);
+    for (size_t k = 2; k < REGIONS; k++) CHECK(!out[k].pinned);
+    CHECK_FAILS(snakegrid_edit_pins(cells, q, r, keep, REGIONS - 1, options, out),
+                SNAKEGRID_INVALID_ARGUMENT);
+    CHECK_MESSAGE_HAS("count is 23 but there are 24 cells");
+    snakegrid_regions_free(cells);
+    /* r00 dragged onto r10's cell: refused, naming both. */
+    cells = edited_cells(result, 0, q[1] - q[0], r[0] - r[1]);
+    CHECK_FAILS(snakegrid_edit_pins(cells, q, r, NULL, REGIONS, options, out),
+                SNAKEGRID_INVALID_INPUT);
+    CHECK_MESSAGE_HAS("r00");
+    CHECK_MESSAGE_HAS("r10");
+    snakegrid_regions_free(cells);
+    snakegrid_result_free(result);
+    snakegrid_options_free(options);
+    snakegrid_regions_free(regions);
+}
+
 static void test_cancel(void) {
     snakegrid_options *options = make_options();
     snakegrid_regions *regions = make_regions();
@@ -821,6 +939,8 @@ int main(void) {
     test_run();
     test_hexagons();
     test_groups();
+    test_pins();
+    test_edit_pins();
     test_cancel();
     test_score();
     test_threads();

@@ -162,6 +162,7 @@ pub fn renamed_and_shuffled(regions: &[Region]) -> Vec<Region> {
             geometry: r.geometry.clone(),
             // Groups renamed too: reversed names reorder them ("AL" and "LA" swap).
             group: (r.group.as_ref()).map(|g| g.chars().rev().collect::<String>() + "-x"),
+            pin: r.pin,
         })
         .collect();
     other.reverse();
