@@ -11,8 +11,8 @@ the working-CRS rule, the input checks and the added fields all come from the li
 from ._library import Cancelled, LibraryError, SnakegridError, library_path, load
 from .crs import WorkingCrs, working_crs
 from .layout import (
-    Cell, Field, GridMap, GroupMetrics, LayoutMetrics, RegionMetrics, fields, id_text, layout,
-    score)
+    Cell, Field, GridMap, GroupMetrics, LayoutMetrics, RegionMetrics, edit_pins, fields, id_text,
+    layout, score)
 from .options import Option, check_options, options
 
 
@@ -23,6 +23,7 @@ def library_version():
 
 __all__ = [
     "Cancelled", "Cell", "Field", "GridMap", "GroupMetrics", "LayoutMetrics", "LibraryError",
-    "Option", "RegionMetrics", "SnakegridError", "WorkingCrs", "check_options", "fields", "id_text",
+    "Option", "RegionMetrics", "SnakegridError", "WorkingCrs", "check_options", "edit_pins", "fields",
+    "id_text",
     "layout", "library_path", "library_version", "load", "options", "score", "working_crs",
 ]

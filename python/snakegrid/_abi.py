@@ -101,6 +101,17 @@ class GroupMetrics(ctypes.Structure):
     ]
 
 
+class EditPin(ctypes.Structure):
+    """snakegrid_edit_pin."""
+
+    _fields_ = [
+        ("pinned", ctypes.c_bool),
+        ("moved", ctypes.c_bool),
+        ("col", ctypes.c_int32),
+        ("row", ctypes.c_int32),
+    ]
+
+
 #: Every mirrored struct under its C name, for the layout test.
 STRUCTS = {
     "snakegrid_option": Option,
@@ -108,6 +119,7 @@ STRUCTS = {
     "snakegrid_region_metrics": RegionMetrics,
     "snakegrid_layout_metrics": LayoutMetrics,
     "snakegrid_group_metrics": GroupMetrics,
+    "snakegrid_edit_pin": EditPin,
 }
 
 #: snakegrid_option_kind values, by position.
@@ -140,6 +152,12 @@ SIGNATURES = {
     "snakegrid_regions_add": (_STATUS, [_P, _TEXT, _WKB, _SIZE]),
     "snakegrid_regions_add_feature": (_STATUS, [_P, _TEXT, _TEXT, _WKB, _SIZE]),
     "snakegrid_regions_set_group": (_STATUS, [_P, _SIZE, _TEXT]),
+    "snakegrid_regions_set_pin": (_STATUS, [_P, _SIZE, ctypes.c_double, ctypes.c_double]),
+    "snakegrid_edit_pins": (
+        _STATUS,
+        [_P, ctypes.POINTER(ctypes.c_int32), ctypes.POINTER(ctypes.c_int32),
+         ctypes.POINTER(ctypes.c_bool), _SIZE, _P, ctypes.POINTER(EditPin)],
+    ),
     "snakegrid_run": (_STATUS, [_P, _P, PROGRESS, _P, _OUT_P]),
     "snakegrid_result_free": (None, [_P]),
     "snakegrid_result_count": (_STATUS, [_P, _OUT_SIZE]),

@@ -7,6 +7,7 @@ adds (snakegrid_field_info), so names, types and values are the command line's.
 
 import ctypes
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any, Dict, List, Optional
 
@@ -126,15 +127,18 @@ def _add_features(lib, handle, geometries, ids, labels):
     return geometries
 
 
-def layout(geometries, ids=None, *, labels=None, groups=None, progress=None, library=None,
-           **options):
+def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progress=None,
+           library=None, **options):
     """Lays out regions as a grid map: one cell per region (squares, or hexagons with cell="hex").
 
     `geometries`: shapely polygons or multipolygons, or their WKB, in a planar CRS (project a
     lon/lat layer first, e.g. to working_crs(...)). `ids`: one unique id per region (default
     the positions). `groups`: one group per region (any values, compared as id_text() gives
     them; None: a group of its own), whose regions keep together in one block of cells per
-    landmass; option group_gap=1 keeps the blocks a cell apart. `options`: the method's parameters by name (see options()), e.g.
+    landmass; option group_gap=1 keeps the blocks a cell apart. `pins`: per region None (free)
+    or its cell's (column, row), whole numbers as the grid layer numbers them (rows from the
+    top); with pins every cell is numbered in the pins' frame (see edit_pins for a re-layout
+    after hand edits). `options`: the method's parameters by name (see options()), e.g.
     ``alpha=2, refine=False, shifts=[(0, 0), (0.5, 0.5)]``. `progress(fraction, message)` is
     called during the run, possibly from another thread; returning False cancels the run,
     which then raises Cancelled. Bad input or options raise SnakegridError with the library's
@@ -164,6 +168,15 @@ def layout(geometries, ids=None, *, labels=None, groups=None, progress=None, lib
                 name = id_text(group)
                 lib.check(lib.c.snakegrid_regions_set_group(
                     regions, k, None if name is None else name.encode()))
+        if pins is not None:
+            pins = list(pins)
+            if len(pins) != len(geometries):
+                raise ValueError(f"{len(geometries)} geometries and {len(pins)} pins: give one "
+                                 "pin (or None) per region")
+            for k, pin in enumerate(pins):
+                col, row = (math.nan, math.nan) if pin is None else (
+                    math.nan if v is None else float(v) for v in pin)
+                lib.check(lib.c.snakegrid_regions_set_pin(regions, k, col, row))
         set_options(lib, handle, options)
         result = ctypes.c_void_p()
         status = lib.c.snakegrid_run(regions, handle, c_progress, None, ctypes.byref(result))
@@ -244,3 +257,27 @@ def score(regions, region_ids, cells, cell_ids, *, region_labels=None, cell_labe
         lib.check(lib.c.snakegrid_score(
             region_handle, cell_handle, ctypes.byref(layout_metrics), per_region, len(regions)))
     return _copy(LayoutMetrics, layout_metrics), [_copy(RegionMetrics, m) for m in per_region]
+
+
+def edit_pins(cells, cell_ids, q, r, *, keep=None, labels=None, library=None, **options):
+    """The pins a grid layer edited by hand gives, for a re-layout: `cells` the layer's cell
+    polygons (shapely or WKB) under their regions' ids, `q` and `r` their grid_q and grid_r
+    fields as written (for squares grid_col and grid_row), `keep` (optional) whether each was
+    ticked to keep, `labels` naming them in messages; `options` as for layout() (the cell shape
+    counts). A cell more than a quarter
+    cell from the position q, r name was moved, to the nearest lattice position. Returns per
+    cell None (laid out again) or (col, row, moved): pass [(col, row) or None] as layout()'s
+    `pins` with the source regions. Two cells on one position raise SnakegridError naming both.
+    """
+    lib = library or _library.load()
+    count = len(cells)
+    as_array = (ctypes.c_int32 * count)
+    with lib.handle("regions") as cell_handle, lib.handle("options") as handle:
+        _add_features(lib, cell_handle, cells, cell_ids, labels)
+        set_options(lib, handle, options)
+        out = (_abi.EditPin * count)()
+        keep_array = None if keep is None else (ctypes.c_bool * count)(*(bool(k) for k in keep))
+        lib.check(lib.c.snakegrid_edit_pins(
+            cell_handle, as_array(*(int(v) for v in q)), as_array(*(int(v) for v in r)),
+            keep_array, count, handle, out))
+    return [(p.col, p.row, p.moved) if p.pinned else None for p in out]

@@ -11,6 +11,7 @@ import sys
 import pyogrio
 import pytest
 import shapely
+import shapely.affinity
 
 import snakegrid
 
@@ -70,6 +71,54 @@ def test_groups_give_the_command_line_cells_and_group_metrics(us_states, tmp_pat
     assert snakegrid.layout(us_states.geometry, us_states["id"]).group_metrics is None
     with pytest.raises(ValueError, match="one group per region"):
         snakegrid.layout(us_states.geometry, us_states["id"], groups=["west"])
+
+
+#: The NYT's hand-made us_states cells for five states (issue 18), columns from the west, rows
+#: from the top.
+NYT = {"WA": (1, 2), "FL": (7, 7), "ME": (11, 0), "CA": (0, 4), "TX": (3, 6)}
+
+
+def test_pins_give_the_command_line_cells(us_states, tmp_path):
+    frame = us_states.copy()
+    frame["pc"] = [NYT.get(a, (None, None))[0] for a in frame["abbr"]]
+    frame["pr"] = [NYT.get(a, (None, None))[1] for a in frame["abbr"]]
+    source = str(tmp_path / "pinned.gpkg")
+    pyogrio.write_dataframe(frame, source)
+    grid = snakegrid.layout(frame.geometry, frame["id"],
+                            pins=[NYT.get(a) for a in frame["abbr"]])
+    cli = cli_grid(str(tmp_path / "pinned-grid.gpkg"), source, "-pin_col", "pc", "-pin_row", "pr")
+    assert python_cells(grid) == cells_of(cli)
+    by_abbr = dict(zip(frame["id"], frame["abbr"]))
+    got = {by_abbr[c.id]: (c.fields["grid_col"], c.fields["grid_row"]) for c in grid.cells}
+    assert {a: got[a] for a in NYT} == NYT
+    with pytest.raises(snakegrid.SnakegridError, match="not a whole number"):
+        snakegrid.layout(frame.geometry, frame["id"], pins=[(0.5, 1)] + [None] * (len(frame) - 1))
+
+
+def test_a_relayout_keeps_the_moved_and_kept_cells(us_states):
+    grid = snakegrid.layout(us_states.geometry, us_states["abbr"])
+    cells = [c.geometry for c in grid.cells]
+    ids = [c.id for c in grid.cells]
+    q = [c.fields["grid_q"] for c in grid.cells]
+    r = [c.fields["grid_r"] for c in grid.cells]
+    # By hand: Texas three cells down, Maine two right; Ohio ticked to keep.
+    moves = {"TX": (0, -3), "ME": (2, 0)}
+    for k, region in enumerate(ids):
+        if region in moves:
+            dx, dy = moves[region]
+            cells[k] = shapely.affinity.translate(cells[k], dx * grid.cell_size,
+                                                  dy * grid.cell_size)
+    pins = snakegrid.edit_pins(cells, ids, q, r, keep=[i == "OH" for i in ids])
+    pinned = {i: p for i, p in zip(ids, pins) if p}
+    at = {c.id: (c.fields["grid_col"], c.fields["grid_row"]) for c in grid.cells}
+    assert pinned == {"TX": (at["TX"][0], at["TX"][1] + 3, True),
+                      "ME": (at["ME"][0] + 2, at["ME"][1], True),
+                      "OH": (*at["OH"], False)}
+    again = snakegrid.layout(us_states.geometry, us_states["abbr"],
+                             pins=[pinned[i][:2] if i in pinned else None for i in ids])
+    cells_again = {c.id: (c.fields["grid_col"], c.fields["grid_row"]) for c in again.cells}
+    assert {i: cells_again[i] for i in pinned} == {i: p[:2] for i, p in pinned.items()}
+    assert len(set(cells_again.values())) == len(ids)
 
 
 def test_options_are_the_command_line_parameters():

@@ -6,7 +6,7 @@ from qgis.core import QgsProcessingProvider
 from qgis.PyQt.QtGui import QIcon
 
 from . import library
-from .algorithms.gridmap import GridMapAlgorithm
+from .algorithms.gridmap import GridMapAlgorithm, RelayoutAlgorithm
 from .algorithms.metrics import GridMetricsAlgorithm
 
 ICON = os.path.join(os.path.dirname(__file__), "icon.svg")
@@ -42,3 +42,4 @@ class SnakegridProvider(QgsProcessingProvider):
     def loadAlgorithms(self):  # noqa: N802
         self.addAlgorithm(GridMapAlgorithm())
         self.addAlgorithm(GridMetricsAlgorithm())
+        self.addAlgorithm(RelayoutAlgorithm())

@@ -148,7 +148,7 @@ def test_provider_and_algorithms_are_registered_and_findable(qgis_app):
     assert provider is not None and not provider.icon().isNull()
     assert re.match(r"^\d+\.\d+\.\d+ \(library \d+\.\d+\.\d+\)$", provider.versionInfo())
     assert provider.warningMessage() == ""
-    for name in ("gridmap", "gridmetrics"):
+    for name in ("gridmap", "gridmetrics", "relayout"):
         alg = algorithm(name)
         assert alg.canExecute() == (True, "")
         assert alg.group() and alg.groupId()
@@ -188,6 +188,79 @@ def test_a_group_field_gives_the_command_line_layout_and_group_outputs(qgis_app,
     assert sorted(blocks.values()) == [1, 2]
 
 
+#: The NYT's hand-made us_states cells for five states by FIPS id (issue 18): WA, FL, ME, CA, TX.
+NYT = {"53": (1, 2), "12": (7, 7), "23": (11, 0), "06": (0, 4), "48": (3, 6)}
+
+
+def test_pin_fields_give_the_command_line_layout(qgis_app, tmp_path):
+    layer = QgsVectorLayer(US_STATES, "us_states", "ogr")
+    source = str(tmp_path / "pinned.gpkg")
+    pinned = QgsVectorLayer("MultiPolygon?crs=" + layer.crs().authid(), "pinned", "memory")
+    provider = pinned.dataProvider()
+    provider.addAttributes([QgsField("id", QVariant.String), QgsField("pc", QVariant.Int),
+                            QgsField("pr", QVariant.Double)])
+    pinned.updateFields()
+    for feature in layer.getFeatures():
+        out = QgsFeature(pinned.fields())
+        col, row = NYT.get(feature["id"], (None, None))
+        out.setAttributes([feature["id"], col, row])
+        out.setGeometry(feature.geometry())
+        provider.addFeature(out)
+    options = QgsVectorFileWriter.SaveVectorOptions()
+    options.driverName = "GPKG"
+    QgsVectorFileWriter.writeAsVectorFormatV3(pinned, source, QgsCoordinateTransformContext(),
+                                              options)
+    result = run("gridmap", INPUT=source, ID_FIELD="id", PIN_COL_FIELD="pc", PIN_ROW_FIELD="pr",
+                 OUTPUT="memory:")
+    cells = layout(result["OUTPUT"])
+    assert cells == layout(cli(str(tmp_path / "cli.gpkg"), source, "-pin_col", "pc",
+                               "-pin_row", "pr"))
+    assert {i: cells[i] for i in NYT} == NYT
+    with pytest.raises(QgsProcessingException, match="set both fields or neither"):
+        run("gridmap", INPUT=source, ID_FIELD="id", PIN_COL_FIELD="pc", OUTPUT="memory:")
+
+
+def _moved(grid, moves, keep=()):
+    """A copy of grid layer `grid` with the cells of `moves` (id: (dx, dy) in cells, y up)
+    moved and a boolean field keep, true for the ids in `keep`."""
+    edited = grid.materialize(QgsFeatureRequest())
+    edited.startEditing()
+    edited.addAttribute(QgsField("keep", QVariant.Bool))
+    edited.updateFields()
+    side = next(edited.getFeatures()).geometry().area() ** 0.5
+    for feature in edited.getFeatures():
+        if feature["id"] in moves:
+            dx, dy = moves[feature["id"]]
+            geometry = feature.geometry()
+            geometry.translate(dx * side, dy * side)
+            edited.changeGeometry(feature.id(), geometry)
+        edited.changeAttributeValue(feature.id(), edited.fields().lookupField("keep"),
+                                    feature["id"] in keep)
+    edited.commitChanges()
+    return edited
+
+
+def test_a_relayout_keeps_moved_and_ticked_cells(us_run):
+    grid = us_run["OUTPUT"]
+    before = layout(grid)
+    # By hand: Texas (48) three cells down, Maine (23) two right; Ohio (39) ticked to keep.
+    edited = _moved(grid, {"48": (0, -3), "23": (2, 0)}, keep=("39",))
+    log = Log()
+    result = run("relayout", INPUT=US_STATES, ID_FIELD="id", EDITED=edited, KEEP_FIELD="keep",
+                 OUTPUT="memory:", feedback=log)
+    after = layout(result["OUTPUT"])
+    assert after["48"] == (before["48"][0], before["48"][1] + 3)
+    assert after["23"] == (before["23"][0] + 2, before["23"][1])
+    assert after["39"] == before["39"]
+    assert len(set(after.values())) == 49 == result["OUTPUT"].featureCount()
+    assert any("2 moved cells and 1 kept regions pinned" in line for line in log.lines)
+    # Texas dragged onto Oklahoma's cell (40): refused, naming both.
+    (tc, tr), (oc, orow) = before["48"], before["40"]
+    onto = _moved(grid, {"48": (oc - tc, tr - orow)})
+    with pytest.raises(QgsProcessingException, match="feature (48|40): .*feature (40|48)"):
+        run("relayout", INPUT=US_STATES, ID_FIELD="id", EDITED=onto, OUTPUT="memory:")
+
+
 def test_parameters_are_the_library_table_in_upper_case(qgis_app):
     import snakegrid
 
@@ -195,7 +268,8 @@ def test_parameters_are_the_library_table_in_upper_case(qgis_app):
     table = snakegrid.options()
     method = [p for p in alg.parameterDefinitions()
               if p.name() not in ("INPUT", "ID_FIELD", "GROUP_FIELD", "LABEL_FIELD",
-                                  "TARGET_CRS", "OUTPUT", "OUTLINE", "HEXJSON")]
+                                  "TARGET_CRS", "PIN_COL_FIELD", "PIN_ROW_FIELD", "OUTPUT",
+                                  "OUTLINE", "HEXJSON")]
     assert [p.name() for p in method] == [o.name.upper() for o in table]
     assert all(p.name() == p.name().upper() for p in alg.parameterDefinitions())
     for option, parameter in zip(table, method):

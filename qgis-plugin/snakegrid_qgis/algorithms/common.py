@@ -120,13 +120,27 @@ def _id(value):
     return value
 
 
+def _number(value, label):
+    """A pin attribute as a number (None for NULL or blank), or a clear error naming the
+    feature; the library checks that it is whole."""
+    value = _id(value)
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return None
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise QgsProcessingException(f"feature {label}: the pin value {value!r} is not a "
+                                     "number") from None
+
+
 class Features:
     """The features of a source as the library takes them: ids (the id field's values, else the
     feature ids, as on the command line), labels naming them ("FID 3") and their geometries.
     The library checks each one (snakegrid.layout and .score), with the command line's
     messages."""
 
-    def __init__(self, source, id_field, feedback, progress_to, group_field=None):
+    def __init__(self, source, id_field, feedback, progress_to, group_field=None,
+                 pin_fields=None):
         self.crs = source.sourceCrs()
         self.fields = source.fields()
         id_index = self.fields.lookupField(id_field) if id_field else -1
@@ -134,6 +148,9 @@ class Features:
         self.features, self.ids, self.labels, self.geometries = [], [], [], []
         #: Each feature's group (None: NULL), or None without a group field.
         self.groups = [] if group_index >= 0 else None
+        pin_indices = [self.fields.lookupField(f) for f in pin_fields or ()]
+        #: Each feature's pin, (column, row) with None for NULL, or None without pin fields.
+        self.pins = [] if len(pin_indices) == 2 and min(pin_indices) >= 0 else None
         total = max(source.featureCount(), 1)
         # The library checks and repairs geometries as the command line does (a bow-tie is
         # repaired with a note): QGIS's own validity check would refuse them first.
@@ -148,6 +165,9 @@ class Features:
             self.labels.append(f"FID {feature.id()}")
             if self.groups is not None:
                 self.groups.append(_id(feature.attribute(group_index)))
+            if self.pins is not None:
+                self.pins.append(tuple(_number(feature.attribute(i), self.labels[-1])
+                                       for i in pin_indices))
             geometry = feature.geometry()
             self.geometries.append(None if geometry.isNull() else geometry)
             feedback.setProgress(progress_to * (n + 1) / total)

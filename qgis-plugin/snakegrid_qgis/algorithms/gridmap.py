@@ -26,6 +26,7 @@ from . import common, parameters
 INPUT, ID_FIELD, GROUP_FIELD, LABEL_FIELD, TARGET_CRS, OUTPUT, OUTLINE, HEXJSON = (
     "INPUT", "ID_FIELD", "GROUP_FIELD", "LABEL_FIELD", "TARGET_CRS", "OUTPUT", "OUTLINE",
     "HEXJSON")
+PIN_COL_FIELD, PIN_ROW_FIELD = "PIN_COL_FIELD", "PIN_ROW_FIELD"
 
 #: The group metrics (method.md section 10), numeric outputs of a run with a group field.
 GROUP_OUTPUTS = [
@@ -50,7 +51,10 @@ INPUT: polygons, any source QGIS reads (tick Selected features only to use a sel
 ID_FIELD: unique region id (default: the feature id). GROUP_FIELD (optional): the regions of \
 each group keep together, one block of cells per group on each landmass, the blocks placed like \
 the groups (a NULL or blank value is a group of its own; the parameter group_gap 1 keeps blocks of \
-different groups a cell apart); grid_group numbers the blocks. LABEL_FIELD: a short name used to label \
+different groups a cell apart); grid_group numbers the blocks. PIN_COL_FIELD and PIN_ROW_FIELD \
+(optional, both or neither): each pinned region's cell, whole numbers as grid_col and grid_row \
+count them (NULL: free); the pinned regions keep their cells and every cell is numbered in their \
+frame. LABEL_FIELD: a short name used to label \
 the cells when the output is loaded (default: abbr, else name, if present).
 TARGET_CRS: the working and output CRS, as the command line's -t_srs (default: the layer's CRS \
 when it is projected, else an equal-area CRS centred on the layer, chosen by the library).
@@ -134,9 +138,7 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
         self.addParameter(QgsProcessingParameterField(
             LABEL_FIELD, "Short label field (default: abbr, else name)",
             parentLayerParameterName=INPUT, optional=True))
-        self.addParameter(QgsProcessingParameterCrs(
-            TARGET_CRS, "Working and output CRS (default: the layer's if projected, else an "
-            "equal-area CRS centred on it)", optional=True))
+        self.add_placement_parameters()
         for option in self.options:
             self.addParameter(parameters.definition(option))
         self.addParameter(QgsProcessingParameterFeatureSink(
@@ -151,9 +153,29 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
         for name, label, _ in GROUP_OUTPUTS:
             self.addOutput(QgsProcessingOutputNumber(name, label))
 
+    def add_placement_parameters(self):
+        """The parameters that say where the cells go: the working CRS and the pins."""
+        self.addParameter(QgsProcessingParameterCrs(
+            TARGET_CRS, "Working and output CRS (default: the layer's if projected, else an "
+            "equal-area CRS centred on it)", optional=True))
+        for name, label in ((PIN_COL_FIELD, "Pin column field (pinned cells; optional)"),
+                            (PIN_ROW_FIELD, "Pin row field, from the top (with the column)")):
+            self.addParameter(QgsProcessingParameterField(
+                name, label, parentLayerParameterName=INPUT, optional=True,
+                type=QgsProcessingParameterField.Numeric))
+
+    def placement(self, sg, features, parameters_, context, feedback):
+        """The working CRS and the regions' pins (None: no pins)."""
+        target = self.parameterAsCrs(parameters_, TARGET_CRS, context)
+        return common.working_crs(sg, features, target, feedback), features.pins
+
     def checkParameterValues(self, parameters_, context):  # noqa: N802
         # The library refuses a bad value by name before any feature is read.
         ok, message = super().checkParameterValues(parameters_, context)
+        pin_fields = [self.parameterAsString(parameters_, name, context)
+                      for name in (PIN_COL_FIELD, PIN_ROW_FIELD)]
+        if ok and sum(bool(f) for f in pin_fields) == 1:
+            return False, "Pin column and pin row go together: set both fields or neither"
         if ok and self.options:
             import snakegrid
 
@@ -174,14 +196,16 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
         id_field = self.parameterAsString(parameters_, ID_FIELD, context)
         group_field = self.parameterAsString(parameters_, GROUP_FIELD, context)
         label_field = self.parameterAsString(parameters_, LABEL_FIELD, context)
-        target = self.parameterAsCrs(parameters_, TARGET_CRS, context)
+        pin_fields = [self.parameterAsString(parameters_, name, context)
+                      for name in (PIN_COL_FIELD, PIN_ROW_FIELD)]
         options = parameters.values(self, self.options, parameters_, context)
 
         feedback.setProgressText("reading the layer")
-        features = common.Features(source, id_field, feedback, 10.0, group_field)
-        crs = common.working_crs(sg, features, target, feedback)
+        features = common.Features(source, id_field, feedback, 10.0, group_field,
+                                   [f for f in pin_fields if f])
+        crs, pins = self.placement(sg, features, parameters_, context, feedback)
         grid = sg.layout(features.wkb(crs, context), features.ids, labels=features.labels,
-                         groups=features.groups,
+                         groups=features.groups, pins=pins,
                          progress=common.Progress(feedback, 10.0, 95.0), **options)
         for note in grid.notes:
             feedback.pushWarning(note)
@@ -237,3 +261,75 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
                 results[name] = getattr(grid.group_metrics, attribute)
                 feedback.pushInfo(f"{label}: {results[name]:.4f}")
         return results
+
+
+EDITED, KEEP_FIELD = "EDITED", "KEEP_FIELD"
+
+RELAYOUT_ABOUT = """\
+Lays a grid map out again after you edited it by hand: the cells you moved stay where you put \
+them, the regions you ticked stay where they are, and every other region is laid out around them.
+INPUT: the source polygons the grid map was made from; ID_FIELD: their id field, whose values \
+the grid layer's features carry in the same field.
+EDITED: the grid layer written by Grid map (snake model) and edited: a cell whose centre lies more \
+than a quarter cell from the position its grid_q and grid_r name (for squares, grid_col and \
+grid_row) was moved, to the nearest lattice position (the lattice the unmoved cells lie on); two \
+cells on one position are refused, naming both. KEEP_FIELD (optional): a field of the grid layer, \
+true (or non-zero) for each region to keep where it is. The output is in the grid layer's CRS; \
+for the rest see Grid map (snake model).
+{parameters}"""
+
+
+class RelayoutAlgorithm(GridMapAlgorithm):
+    """Grid map with pins read off a hand-edited grid layer."""
+
+    def name(self):
+        return "relayout"
+
+    def displayName(self):  # noqa: N802
+        return "Re-layout after hand edits"
+
+    def shortHelpString(self):  # noqa: N802
+        return library.problem() or RELAYOUT_ABOUT.format(
+            parameters=parameters.help_text(self.options))
+
+    def createInstance(self):  # noqa: N802
+        return RelayoutAlgorithm()
+
+    def add_placement_parameters(self):
+        self.addParameter(QgsProcessingParameterFeatureSource(
+            EDITED, "Edited grid layer", [QgsProcessing.TypeVectorPolygon]))
+        self.addParameter(QgsProcessingParameterField(
+            KEEP_FIELD, "Keep field of the grid layer (regions ticked to keep; optional)",
+            parentLayerParameterName=EDITED, optional=True))
+
+    def placement(self, sg, features, parameters_, context, feedback):
+        edited = self.parameterAsSource(parameters_, EDITED, context)
+        if edited is None:
+            raise QgsProcessingException(self.invalidSourceError(parameters_, EDITED))
+        id_field = self.parameterAsString(parameters_, ID_FIELD, context)
+        keep_field = self.parameterAsString(parameters_, KEEP_FIELD, context)
+        fields = edited.fields()
+        missing = [name for name in (id_field, "grid_q", "grid_r")
+                   if name and fields.lookupField(name) < 0]
+        if missing:
+            raise QgsProcessingException(
+                f"The edited grid layer has no field {', '.join(missing)}: give the grid layer "
+                "Grid map (snake model) wrote, with the source's id field")
+        cells = common.Features(edited, id_field, feedback, 10.0)
+        at = {name: fields.lookupField(name) for name in ("grid_q", "grid_r")}
+        keep_index = fields.lookupField(keep_field) if keep_field else -1
+        q = [f.attribute(at["grid_q"]) for f in cells.features]
+        r = [f.attribute(at["grid_r"]) for f in cells.features]
+        keep = [keep_index >= 0 and bool(common._id(f.attribute(keep_index)))
+                for f in cells.features]
+        options = parameters.values(self, self.options, parameters_, context)
+        crs = edited.sourceCrs()
+        pins = sg.edit_pins(cells.wkb(crs, context), cells.ids, q, r, keep=keep,
+                            labels=cells.labels, **options)
+        by_id = {sg.id_text(i): pin for i, pin in zip(cells.ids, pins)}
+        moved = sum(1 for pin in pins if pin and pin[2])
+        kept = sum(1 for pin in pins if pin and not pin[2])
+        feedback.pushInfo(f"{moved} moved cells and {kept} kept regions pinned; the other "
+                          f"{len(pins) - moved - kept} laid out again.")
+        return crs, [None if by_id.get(sg.id_text(i)) is None else by_id[sg.id_text(i)][:2]
+                     for i in features.ids]
