@@ -160,20 +160,12 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
     with lib.handle("regions") as regions, lib.handle("options") as handle:
         geometries = _add_features(lib, regions, geometries, ids, labels)
         if groups is not None:
-            groups = list(groups)
-            if len(groups) != len(geometries):
-                raise ValueError(f"{len(geometries)} geometries and {len(groups)} groups: give "
-                                 "one group per region")
-            for k, group in enumerate(groups):
+            for k, group in enumerate(_per_region(groups, geometries, "groups", "group")):
                 name = id_text(group)
                 lib.check(lib.c.snakegrid_regions_set_group(
                     regions, k, None if name is None else name.encode()))
         if pins is not None:
-            pins = list(pins)
-            if len(pins) != len(geometries):
-                raise ValueError(f"{len(geometries)} geometries and {len(pins)} pins: give one "
-                                 "pin (or None) per region")
-            for k, pin in enumerate(pins):
+            for k, pin in enumerate(_per_region(pins, geometries, "pins", "pin (or None)")):
                 col, row = (math.nan, math.nan) if pin is None else (
                     math.nan if v is None else float(v) for v in pin)
                 lib.check(lib.c.snakegrid_regions_set_pin(regions, k, col, row))
@@ -188,6 +180,15 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
             return _read(lib, result, as_shapely)
         finally:
             lib.c.snakegrid_result_free(result)
+
+
+def _per_region(values, geometries, name, one):
+    """`values` as a list, one per geometry, else ValueError."""
+    values = list(values)
+    if len(values) != len(geometries):
+        raise ValueError(f"{len(geometries)} geometries and {len(values)} {name}: give one "
+                         f"{one} per region")
+    return values
 
 
 def _read(lib, result, as_shapely):

@@ -159,25 +159,34 @@ def test_provider_and_algorithms_are_registered_and_findable(qgis_app):
         assert len(help_text) > 300 and not re.search(r"<\w+>", help_text), "HTML in the help"
 
 
-def test_a_group_field_gives_the_command_line_layout_and_group_outputs(qgis_app, tmp_path):
-    # The states west and east of the middle of the layer, as two groups a cell apart.
+def states_with(path, fields, values):
+    """us_states' ids and geometries with `fields` added, each feature's `values(feature)`,
+    written to the GeoPackage `path`."""
     layer = QgsVectorLayer(US_STATES, "us_states", "ogr")
-    middle = layer.extent().center().x()
-    source = str(tmp_path / "halves.gpkg")
-    halves = QgsVectorLayer("MultiPolygon?crs=" + layer.crs().authid(), "halves", "memory")
-    provider = halves.dataProvider()
-    provider.addAttributes([QgsField("id", QVariant.String), QgsField("half", QVariant.String)])
-    halves.updateFields()
+    copy = QgsVectorLayer("MultiPolygon?crs=" + layer.crs().authid(), "copy", "memory")
+    provider = copy.dataProvider()
+    provider.addAttributes([QgsField("id", QVariant.String), *fields])
+    copy.updateFields()
     for feature in layer.getFeatures():
-        out = QgsFeature(halves.fields())
-        west = feature.geometry().centroid().asPoint().x() < middle
-        out.setAttributes([feature["id"], "west" if west else "east"])
+        out = QgsFeature(copy.fields())
+        out.setAttributes([feature["id"], *values(feature)])
         out.setGeometry(feature.geometry())
         provider.addFeature(out)
     options = QgsVectorFileWriter.SaveVectorOptions()
     options.driverName = "GPKG"
-    QgsVectorFileWriter.writeAsVectorFormatV3(halves, source, QgsCoordinateTransformContext(),
+    QgsVectorFileWriter.writeAsVectorFormatV3(copy, path, QgsCoordinateTransformContext(),
                                               options)
+
+
+def test_a_group_field_gives_the_command_line_layout_and_group_outputs(qgis_app, tmp_path):
+    # The states west and east of the middle of the layer, as two groups a cell apart.
+    middle = QgsVectorLayer(US_STATES, "us_states", "ogr").extent().center().x()
+    source = str(tmp_path / "halves.gpkg")
+
+    def half(feature):
+        return ["west" if feature.geometry().centroid().asPoint().x() < middle else "east"]
+
+    states_with(source, [QgsField("half", QVariant.String)], half)
     result = run("gridmap", INPUT=source, ID_FIELD="id", GROUP_FIELD="half", GROUP_GAP=1,
                  OUTPUT="memory:")
     expected = layout(cli(str(tmp_path / "cli.gpkg"), source, "-group", "half",
@@ -193,23 +202,9 @@ NYT = {"53": (1, 2), "12": (7, 7), "23": (11, 0), "06": (0, 4), "48": (3, 6)}
 
 
 def test_pin_fields_give_the_command_line_layout(qgis_app, tmp_path):
-    layer = QgsVectorLayer(US_STATES, "us_states", "ogr")
     source = str(tmp_path / "pinned.gpkg")
-    pinned = QgsVectorLayer("MultiPolygon?crs=" + layer.crs().authid(), "pinned", "memory")
-    provider = pinned.dataProvider()
-    provider.addAttributes([QgsField("id", QVariant.String), QgsField("pc", QVariant.Int),
-                            QgsField("pr", QVariant.Double)])
-    pinned.updateFields()
-    for feature in layer.getFeatures():
-        out = QgsFeature(pinned.fields())
-        col, row = NYT.get(feature["id"], (None, None))
-        out.setAttributes([feature["id"], col, row])
-        out.setGeometry(feature.geometry())
-        provider.addFeature(out)
-    options = QgsVectorFileWriter.SaveVectorOptions()
-    options.driverName = "GPKG"
-    QgsVectorFileWriter.writeAsVectorFormatV3(pinned, source, QgsCoordinateTransformContext(),
-                                              options)
+    states_with(source, [QgsField("pc", QVariant.Int), QgsField("pr", QVariant.Double)],
+                lambda feature: list(NYT.get(feature["id"], (None, None))))
     result = run("gridmap", INPUT=source, ID_FIELD="id", PIN_COL_FIELD="pc", PIN_ROW_FIELD="pr",
                  OUTPUT="memory:")
     cells = layout(result["OUTPUT"])

@@ -21,6 +21,19 @@ pub(crate) struct RegionList {
     admission: Admission,
 }
 
+impl RegionList {
+    /// Region `index`, or the error for an index past the last.
+    fn region_mut(&mut self, index: usize) -> Result<&mut Region, Failure> {
+        let count = self.regions.len();
+        self.regions.get_mut(index).ok_or_else(|| {
+            Failure::new(
+                Status::INVALID_ARGUMENT,
+                format!("index {index}: there are {count} regions"),
+            )
+        })
+    }
+}
+
 impl Deref for RegionList {
     type Target = Vec<Region>;
     fn deref(&self) -> &Vec<Region> {
@@ -172,13 +185,7 @@ pub unsafe extern "C" fn snakegrid_regions_set_group(
         let list = unsafe { handle::get_mut(regions, "regions") }?;
         // SAFETY: NUL-terminated string or NULL (header contract).
         let group = unsafe { handle::optional_text(group, "group") }?;
-        let count = list.regions.len();
-        let region = list.regions.get_mut(index).ok_or_else(|| {
-            Failure::new(
-                Status::INVALID_ARGUMENT,
-                format!("index {index}: there are {count} regions"),
-            )
-        })?;
+        let region = list.region_mut(index)?;
         region.group = group.map(str::to_owned);
         Ok(())
     })
@@ -206,13 +213,7 @@ pub unsafe extern "C" fn snakegrid_regions_set_pin(
     guard("snakegrid_regions_set_pin", || {
         // SAFETY: a live handle nobody else uses meanwhile (header contract).
         let list = unsafe { handle::get_mut(regions, "regions") }?;
-        let count = list.regions.len();
-        let region = list.regions.get_mut(index).ok_or_else(|| {
-            Failure::new(
-                Status::INVALID_ARGUMENT,
-                format!("index {index}: there are {count} regions"),
-            )
-        })?;
+        let region = list.region_mut(index)?;
         let pin = crate::pins::pin_of(Some(col), Some(row)).map_err(|message| {
             Failure::new(
                 Status::INVALID_ARGUMENT,
