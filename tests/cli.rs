@@ -572,6 +572,22 @@ fn outputs_of(
     ["grid.gpkg", "r.json", "p.svg"].map(|f| std::fs::read(dir.join(f)).unwrap())
 }
 
+/// A new GeoPackage at `to` holding one empty layer `name` in `srs`.
+fn new_geopackage(to: &Path, name: &str, srs: &SpatialRef) -> Dataset {
+    let mut output = DriverManager::get_driver_by_name("GPKG")
+        .unwrap()
+        .create_vector_only(to)
+        .unwrap();
+    output
+        .create_layer(LayerOptions {
+            name,
+            srs: Some(srs),
+            ..Default::default()
+        })
+        .unwrap();
+    output
+}
+
 /// A copy of layer `layer` with its features in reverse order (and so other FIDs), optionally
 /// reprojected; every field is copied as text.
 fn rewrite(layer: &str, to: &Path, reverse: bool, srs: Option<&SpatialRef>) {
@@ -595,17 +611,8 @@ fn rewrite(layer: &str, to: &Path, reverse: bool, srs: Option<&SpatialRef>) {
     if reverse {
         rows.reverse();
     }
-    let mut output = DriverManager::get_driver_by_name("GPKG")
-        .unwrap()
-        .create_vector_only(to)
-        .unwrap();
-    let layer = output
-        .create_layer(LayerOptions {
-            name: layer,
-            srs: Some(srs.unwrap_or(&source_srs)),
-            ..Default::default()
-        })
-        .unwrap();
+    let output = new_geopackage(to, layer, srs.unwrap_or(&source_srs));
+    let layer = output.layer(0).unwrap();
     let fields: Vec<(&str, u32)> = names
         .iter()
         .map(|n| (n.as_str(), OGRFieldType::OFTString))
@@ -1076,17 +1083,8 @@ fn pinned_states(to: &Path, pins: &[(&str, (&str, &str))]) {
     let input = Dataset::open(data("us_states")).unwrap();
     let mut source = input.layer(0).unwrap();
     let srs = source.spatial_ref().unwrap();
-    let mut output = DriverManager::get_driver_by_name("GPKG")
-        .unwrap()
-        .create_vector_only(to)
-        .unwrap();
-    let layer = output
-        .create_layer(LayerOptions {
-            name: "us_states",
-            srs: Some(&srs),
-            ..Default::default()
-        })
-        .unwrap();
+    let output = new_geopackage(to, "us_states", &srs);
+    let layer = output.layer(0).unwrap();
     let fields = [
         ("abbr", OGRFieldType::OFTString),
         ("pc", OGRFieldType::OFTString),

@@ -110,9 +110,6 @@ fn generate_here(
     let gap = grouped && params.group_gap > 0;
     let tiling = Tiling::of(params);
     let pins = pins::positions(regions, &order, tiling, grouped.then_some(&blocks), gap)?;
-    let pins: Vec<(usize, Position)> = (pins.into_iter().enumerate())
-        .filter_map(|(i, p)| Some((i, p?)))
-        .collect();
     let base = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
 
     let mut levels = params.snake_noise_levels();

@@ -55,8 +55,8 @@ const SCALE_RANGE: f64 = 2.0;
 /// millions of cells for nothing.
 const SPAN_PER_REGION: i64 = 2;
 
-/// Per region (in the order of `order`, the method's geometric order), its pin as a lattice
-/// position, after refusing by name two regions on one cell, pins spanning more than
+/// The pinned regions (indices in the order of `order`, the method's geometric order, ascending)
+/// with their pins as lattice positions, after refusing by name two regions on one cell, pins spanning more than
 /// [`SPAN_PER_REGION`] columns or rows per region and, with `blocks` (groups), pins that cannot
 /// lie in one block of their group's cells or, with `gap`, pins of two groups that touch.
 pub fn positions(
@@ -65,15 +65,12 @@ pub fn positions(
     tiling: Tiling,
     blocks: Option<&Blocks>,
     gap: bool,
-) -> Result<Vec<Option<Position>>, Error> {
-    let pins: Vec<Option<Position>> = (order.iter())
-        .map(|&i| regions[i].pin.map(|p| tiling.from_offset_coordinates(p)))
-        .collect();
+) -> Result<Vec<(usize, Position)>, Error> {
     let id = |k: usize| regions[order[k]].id.as_str();
-    // In the input order, so that the first clash the user's layer holds is the one named.
-    let mut pinned: Vec<(usize, Position)> = (pins.iter().enumerate())
-        .filter_map(|(k, p)| Some((k, (*p)?)))
+    let mut pinned: Vec<(usize, Position)> = (order.iter().enumerate())
+        .filter_map(|(k, &i)| Some((k, tiling.from_offset_coordinates(regions[i].pin?))))
         .collect();
+    // In the input order, so that the first clash the user's layer holds is the one named.
     pinned.sort_unstable_by_key(|&(k, _)| order[k]);
     let mut at: HashMap<Position, usize> = HashMap::new();
     for &(k, p) in &pinned {
@@ -106,7 +103,8 @@ pub fn positions(
         }
     }
     let Some(blocks) = blocks else {
-        return Ok(pins);
+        pinned.sort_unstable();
+        return Ok(pinned);
     };
     let mut sizes = vec![0; blocks.count()];
     for &b in &blocks.of {
@@ -142,7 +140,8 @@ pub fn positions(
             }
         }
     }
-    Ok(pins)
+    pinned.sort_unstable();
+    Ok(pinned)
 }
 
 /// Rounds of [`place`]'s agreement between the cell side and the bent outline's area.
