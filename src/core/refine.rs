@@ -145,6 +145,8 @@ fn anneal(
     // Inverses of the moves accepted since the best state, to walk back to it at the end.
     let mut since_best = Vec::new();
     let moves = moves(params, regions);
+    // Reused by every proposal: a move allocates nothing.
+    let mut scope = Scope::default();
     for step in 0..moves {
         if step % TICK_MOVES == TICK_MOVES - 1 && !tick(TICK_MOVES as f64 / moves as f64) {
             return None;
@@ -153,7 +155,7 @@ fn anneal(
         let Some(proposal) = board.propose(problem, &mut rng, may_move) else {
             continue;
         };
-        let scope = problem.scope(proposal, &board);
+        problem.fill_scope(proposal, &board, &mut scope);
         let before = problem.local_energy(&scope, &board);
         let undo = board.apply(proposal);
         let delta = problem.local_energy(&scope, &board) - before;
@@ -322,30 +324,25 @@ impl<'a> Problem<'a> {
         pairs + placements + self.w_notch * notches as f64
     }
 
-    /// What a move changes: the regions it moves, and for a chain the positions whose notches
-    /// it may change (its two ends and their sides).
-    fn scope(&self, proposal: Move, board: &Board) -> Scope {
+    /// Sets `scope` to what a move changes: the regions it moves, and for a chain the positions
+    /// whose notches it may change (its two ends and their sides).
+    fn fill_scope(&self, proposal: Move, board: &Board, scope: &mut Scope) {
+        scope.regions.clear();
+        scope.around.clear();
         match proposal {
-            Move::Swap(a, b) => Scope {
-                regions: vec![a, b],
-                around: Vec::new(),
-            },
+            Move::Swap(a, b) => scope.regions.extend([a, b]),
             Move::Chain(chain) => {
                 let cells = chain.cells();
-                let mut around = Vec::with_capacity(10);
                 for &k in [cells[0], cells[cells.len() - 1]].iter() {
                     let p = (self.cell(k).col, self.cell(k).row);
-                    around.push(p);
-                    around.extend(self.tiling().edge_neighbours(p).iter());
+                    scope.around.push(p);
+                    scope.around.extend(self.tiling().edge_neighbours(p).iter());
                 }
-                around.sort_unstable();
-                around.dedup();
-                Scope {
-                    regions: (cells[..cells.len() - 1].iter())
-                        .filter_map(|&k| board.region_on(k))
-                        .collect(),
-                    around,
-                }
+                scope.around.sort_unstable();
+                scope.around.dedup();
+                (scope.regions).extend(
+                    (cells[..cells.len() - 1].iter()).filter_map(|&k| board.region_on(k)),
+                );
             }
         }
     }
@@ -372,6 +369,7 @@ impl<'a> Problem<'a> {
 }
 
 /// The regions and positions a move touches.
+#[derive(Default)]
 struct Scope {
     regions: Vec<usize>,
     around: Vec<Position>,
@@ -415,6 +413,11 @@ impl Chain {
 
     fn cells(&self) -> &[usize] {
         &self.cells[..self.len]
+    }
+
+    fn push(&mut self, cell: usize) {
+        self.cells[self.len] = cell;
+        self.len += 1;
     }
 
     /// The chain that undoes this one once it is made.
@@ -561,20 +564,20 @@ impl<'a> Board<'a> {
     fn push(&self, problem: &Problem, region: usize, direction: usize) -> Option<Move> {
         let part = problem.layout.part_of[region];
         let start = self.lattice.cells[self.at[region]];
-        let mut cells = vec![self.at[region]];
+        let mut chain = Chain::new(&[self.at[region]]);
         let mut p = (start.col, start.row);
         for _ in 0..LONGEST_CHAIN {
             p = self.lattice.tiling.edge_neighbours(p)[direction];
             let slot = self.slot(p)?;
             let index = slot.cell?;
             match slot.region {
-                Some(other) if problem.layout.part_of[other] == part => cells.push(index),
+                Some(other) if problem.layout.part_of[other] == part => chain.push(index),
                 Some(_) => return None,
                 None => {
                     let own = index < self.pool && self.lattice.cells[index].part == part;
-                    cells.push(index);
+                    chain.push(index);
                     return (own && self.keeps_topology((start.col, start.row), p))
-                        .then(|| Move::Chain(Chain::new(&cells)));
+                        .then_some(Move::Chain(chain));
                 }
             }
         }
@@ -809,7 +812,8 @@ mod tests {
             };
             let total_before = problem.energy(&board.at);
             let shape_before = shape(&map.lattice, &board.at);
-            let scope = problem.scope(proposal, &board);
+            let mut scope = Scope::default();
+            problem.fill_scope(proposal, &board, &mut scope);
             let before = problem.local_energy(&scope, &board);
             let from = board.at.clone();
             board.apply(proposal);
