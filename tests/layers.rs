@@ -80,6 +80,41 @@ fn us_states_beats_tilemaps_and_the_snake_does_real_work() {
     assert_eq!((map.metrics.pieces, map.metrics.holes), (1, 0));
 }
 
+#[test]
+fn only_the_best_candidates_before_refinement_are_refined() {
+    let regions = load("nc_counties");
+    let plain = run(
+        &regions,
+        &Params {
+            refine: false,
+            ..Params::default()
+        },
+    );
+    let refined = run(
+        &regions,
+        &Params {
+            max_refined: Some(3),
+            ..Params::default()
+        },
+    );
+    assert_eq!(plain.candidates.len(), 27);
+    // The refined candidates are the first three of the ranking without refinement (the
+    // plain run's candidates are those layouts as they were before the refinement).
+    let key = |c: &snakegrid::CandidateReport| (c.noise.to_bits(), c.shift.map(f64::to_bits));
+    let mut best: Vec<_> = plain.candidates[..3].iter().map(key).collect();
+    let mut chosen: Vec<_> = refined.candidates.iter().map(key).collect();
+    best.sort_unstable();
+    chosen.sort_unstable();
+    assert_eq!(chosen, best);
+    assert!(refined.notes.iter().any(|n| n.contains("best 3 of the 27")));
+    // Refined, they keep more neighbours than before.
+    let winner = refined.candidates[0].clone();
+    let before = (plain.candidates.iter())
+        .find(|c| key(c) == key(&winner))
+        .expect("the winner was a plain candidate");
+    assert!(winner.metrics.adjacent > before.metrics.adjacent);
+}
+
 /// The defaults with hexagonal cells.
 fn hexagons(orientation: HexOrientation) -> Params {
     Params {

@@ -144,10 +144,29 @@ fn generate_here(
     }
     // Snake runs that no layout uses are not made.
     levels.truncate(jobs.iter().map(|&(r, _)| r + 1).max().unwrap_or(1));
+    let refined = if params.refine {
+        params.refined_count(regions.len(), jobs.len())
+    } else {
+        0
+    };
+    if refined > 0 && refined < jobs.len() {
+        notes.push(format!(
+            "the best {refined} of the {} candidate layouts by the ranking before refinement \
+             were refined (max_refined{})",
+            jobs.len(),
+            if params.max_refined.is_some() {
+                ""
+            } else {
+                " unset: fewer for more regions"
+            }
+        ));
+    }
     let weights = StageWeights::new(params);
     let tracker = Tracker::new(
         progress,
-        (levels.len() * params.max_steps) as f64 + jobs.len() as f64 * weights.layout(),
+        (levels.len() * params.max_steps) as f64
+            + jobs.len() as f64 * weights.plain()
+            + refined as f64 * weights.refinement(),
     );
     let run_count = levels.len();
     let runs = levels
@@ -205,7 +224,7 @@ fn generate_here(
                     &format!("{name}: {}", stage.name()),
                 )
             };
-            let layout = context.layout(network, run, shift, seed(params.seed, 2, k), &report)?;
+            let layout = context.layout(network, run, shift, &report)?;
             if !report(Stage::Scoring, 1.0) {
                 return Err(Error::Cancelled);
             }
@@ -213,30 +232,54 @@ fn generate_here(
         })
         .collect::<Result<Vec<_>, Error>>()?;
 
+    // The refinement moves every candidate about alike, so the best before it are the best
+    // after (see REFINED_REGION_LAYOUTS): only those are refined, each with its own seed.
+    let (layouts, kept): (Vec<Layout>, Vec<usize>) = if refined == 0 {
+        let all = (0..layouts.len()).collect();
+        (layouts, all)
+    } else {
+        let (before, _) = ranked(&layouts, params);
+        let mut chosen = before[..refined].to_vec();
+        chosen.sort_unstable();
+        let mut layouts: Vec<Option<Layout>> = layouts.into_iter().map(Some).collect();
+        let chosen_layouts: Vec<(usize, Layout)> = (chosen.iter())
+            .map(|&k| (k, layouts[k].take().expect("each layout is chosen once")))
+            .collect();
+        let refined = chosen_layouts
+            .into_par_iter()
+            .map(|(k, layout)| {
+                if tracker.cancelled() {
+                    return Err(Error::Cancelled);
+                }
+                let name = format!("layout {} of {}", k + 1, jobs.len());
+                let report = |stage: Stage, share: f64| {
+                    tracker.advance(
+                        share * weights.of(stage),
+                        &format!("{name}: {}", stage.name()),
+                    )
+                };
+                let layout = context.refined(layout, seed(params.seed, 2, k), &report)?;
+                if !report(Stage::Scoring, 1.0) {
+                    return Err(Error::Cancelled);
+                }
+                Ok(layout)
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        (refined, chosen)
+    };
+
     // Whatever rounding left of the count: the layouts are done.
     if !progress(1.0, "ranking the layouts") {
         return Err(Error::Cancelled);
     }
-    let scores = rank::topsis(
-        &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
-        params.topsis_weights,
-    );
-    // The layout's defects first (method.md §8 and the cartographer's priorities: each landmass
-    // in one piece, no holes), then TOPSIS over location, adjacency, orientation and shape.
-    let defects = |k: usize| layouts[k].breaks + layouts[k].metrics.holes as usize;
-    let mut ranking: Vec<usize> = (0..layouts.len()).collect();
-    ranking.sort_by(|&a, &b| {
-        (defects(a).cmp(&defects(b)))
-            .then(scores[b].total_cmp(&scores[a]))
-            .then(a.cmp(&b))
-    });
+    let (ranking, scores) = ranked(&layouts, params);
     let candidates = ranking
         .iter()
         .map(|&k| {
-            let (md, _, run) = &runs[jobs[k].0];
+            let (md, _, run) = &runs[jobs[kept[k]].0];
             CandidateReport {
                 noise: *md,
-                shift: jobs[k].1,
+                shift: jobs[kept[k]].1,
                 metrics: layouts[k].metrics,
                 score: scores[k],
                 snake: run.report.clone(),
@@ -244,8 +287,26 @@ fn generate_here(
         })
         .collect();
     let best = &layouts[ranking[0]];
-    let (_, _, run) = &runs[jobs[ranking[0]].0];
+    let (_, _, run) = &runs[jobs[kept[ranking[0]]].0];
     Ok(context.grid_map(regions, &order, best, run, candidates, notes))
+}
+
+/// The layouts' indices, best first, and their TOPSIS scores: the layout's defects first
+/// (method.md §8 and the cartographer's priorities: each landmass in one piece, no holes), then
+/// TOPSIS over location, adjacency, orientation and shape.
+fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
+    let scores = rank::topsis(
+        &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
+        params.topsis_weights,
+    );
+    let defects = |k: usize| layouts[k].breaks + layouts[k].metrics.holes as usize;
+    let mut ranking: Vec<usize> = (0..layouts.len()).collect();
+    ranking.sort_by(|&a, &b| {
+        (defects(a).cmp(&defects(b)))
+            .then(scores[b].total_cmp(&scores[a]))
+            .then(a.cmp(&b))
+    });
+    (ranking, scores)
 }
 
 /// The regions made ready for the method: in their geometric order (`order[k]` is the input index of the
@@ -558,9 +619,14 @@ impl StageWeights {
         }
     }
 
-    /// One whole layout.
-    fn layout(&self) -> f64 {
-        Self::ASSIGNING + self.refining + Self::SCORING
+    /// A layout before refinement: assigned and scored.
+    fn plain(&self) -> f64 {
+        Self::ASSIGNING + Self::SCORING
+    }
+
+    /// The refinement of a layout, and its scoring again.
+    fn refinement(&self) -> f64 {
+        self.refining + Self::SCORING
     }
 }
 
@@ -572,6 +638,8 @@ struct Layout {
     metrics: LayoutMetrics,
     region_metrics: Vec<RegionMetrics>,
     moved_outline: MultiPolygon<f64>,
+    /// The moved centroids the cells were assigned to (bent onto the pins, if any).
+    moved: Vec<Coord<f64>>,
     /// How many times its landmasses' blocks break ([`metrics::landmass_breaks`]).
     breaks: usize,
 }
@@ -648,14 +716,13 @@ struct Context<'a> {
 }
 
 impl Context<'_> {
-    /// Lattice, assignment, refinement and metrics for one Snake run and one origin shift (§6);
-    /// [`Error::Cancelled`] once `report` returns false.
+    /// Lattice, assignment and metrics for one Snake run and one origin shift (§6), before
+    /// refinement; [`Error::Cancelled`] once `report` returns false.
     fn layout(
         &self,
         network: &Network,
         run: &SnakeRun,
         shift: [f64; 2],
-        seed: u64,
         report: &dyn Fn(Stage, f64) -> bool,
     ) -> Result<Layout, Error> {
         let m = network.centroids;
@@ -719,7 +786,7 @@ impl Context<'_> {
                 selection.assigned
             )));
         }
-        let mut cells = if self.grouped {
+        let cells = if self.grouped {
             if !gap {
                 // Without gaps the blocks share out exactly the landmasses' cells.
                 lattice.cells.truncate(selection.assigned);
@@ -752,10 +819,29 @@ impl Context<'_> {
             let blocks_pinned = anchored(&|i| self.blocks.of[i]);
             groups::dock(&mut lattice, &self.blocks, area, gap, &blocks_pinned);
         }
-        if self.params.refine {
-            cells = self.refine(&lattice, &cells, seed, report)?;
-        }
-        let (metrics, region_metrics) = self.evaluate(&lattice, &cells, moved);
+        Ok(self.scored(lattice, cells, moved_outline, moved.to_vec()))
+    }
+
+    /// `layout` refined (§6b) with `seed`, and scored again.
+    fn refined(
+        &self,
+        layout: Layout,
+        seed: u64,
+        report: &dyn Fn(Stage, f64) -> bool,
+    ) -> Result<Layout, Error> {
+        let cells = self.refine(&layout.lattice, &layout.cells, seed, report)?;
+        Ok(self.scored(layout.lattice, cells, layout.moved_outline, layout.moved))
+    }
+
+    /// A layout with its metrics and its landmasses' breaks.
+    fn scored(
+        &self,
+        lattice: Lattice,
+        cells: Vec<usize>,
+        moved_outline: MultiPolygon<f64>,
+        moved: Vec<Coord<f64>>,
+    ) -> Layout {
+        let (metrics, region_metrics) = self.evaluate(&lattice, &cells, &moved);
         let (positions, landmasses): (Vec<(i32, i32)>, Vec<usize>) = (cells.iter())
             .map(|&k| {
                 let cell = lattice.cells[k];
@@ -766,14 +852,15 @@ impl Context<'_> {
         if self.grouped {
             breaks += metrics::landmass_breaks(&positions, &self.blocks.of, lattice.tiling);
         }
-        Ok(Layout {
+        Layout {
             breaks,
             lattice,
             cells,
             metrics,
             region_metrics,
             moved_outline,
-        })
+            moved,
+        }
     }
 
     /// Each landmass's regions assigned among its own cells (method.md §6), the first `m` of
@@ -1053,5 +1140,21 @@ mod tests {
         params.noise_levels.clear();
         params.shifts.truncate(2);
         assert_eq!(params.layout_count(10), 2);
+    }
+
+    #[test]
+    fn the_refined_budget_follows_the_regions_unless_given() {
+        let mut params = Params::default();
+        // Every candidate of the shared layers but the counties (at most 177 regions).
+        assert_eq!(params.refined_count(177, 27), 27);
+        assert_eq!(params.refined_count(222, 27), 27);
+        assert_eq!(params.refined_count(1000, 27), 6);
+        assert_eq!(params.refined_count(3107, 9), 2);
+        assert_eq!(params.refined_count(33_000, 1), 1);
+        // Never more than the candidates.
+        assert_eq!(params.refined_count(10, 5), 5);
+        params.max_refined = Some(4);
+        assert_eq!(params.refined_count(33_000, 27), 4);
+        assert_eq!(params.refined_count(10, 3), 3);
     }
 }

@@ -340,9 +340,8 @@ impl<'a> Problem<'a> {
                 }
                 scope.around.sort_unstable();
                 scope.around.dedup();
-                (scope.regions).extend(
-                    (cells[..cells.len() - 1].iter()).filter_map(|&k| board.region_on(k)),
-                );
+                (scope.regions)
+                    .extend((cells[..cells.len() - 1].iter()).filter_map(|&k| board.region_on(k)));
             }
         }
     }
