@@ -23,7 +23,6 @@ use super::tiling::{Position, Tiling};
 use super::Params;
 use geo::{BoundingRect, Coord, MultiPolygon};
 use rustc_hash::{FxHashMap, FxHashSet};
-use std::collections::HashMap;
 
 /// The cells the layout may use, tagged with their part: the first `demands.iter().sum()` are
 /// the cells to assign (each part's k; the fixed cells first), the rest the refinement's pool.
@@ -53,7 +52,7 @@ pub fn select(
         all
     };
     // Every position handed out, with its part.
-    let mut taken: HashMap<Position, usize> =
+    let mut taken: FxHashMap<Position, usize> =
         fixed.iter().map(|c| ((c.col, c.row), c.part)).collect();
     let mut open = demands.to_vec();
     for cell in fixed {
@@ -84,7 +83,7 @@ fn pick(
     outlines: &std::cell::OnceCell<Outlines>,
     scored: &[LatticeCell],
     wanted: &[usize],
-    taken: &mut HashMap<Position, usize>,
+    taken: &mut FxHashMap<Position, usize>,
 ) -> Vec<LatticeCell> {
     let mut missing = wanted.to_vec();
     let mut chosen = Vec::with_capacity(wanted.iter().sum());
@@ -169,7 +168,7 @@ fn nearest_free(
     outlines: &Outlines,
     part: usize,
     count: usize,
-    taken: &mut HashMap<Position, usize>,
+    taken: &mut FxHashMap<Position, usize>,
 ) -> Vec<LatticeCell> {
     let Some(bounds) = outline.bounding_rect() else {
         return Vec::new();
@@ -248,7 +247,7 @@ fn nearest_free(
 /// tilings that keep landmasses apart ([`keeps_landmasses_apart`]).
 fn touches_another(
     lattice: &Lattice,
-    taken: &HashMap<Position, usize>,
+    taken: &FxHashMap<Position, usize>,
     at: Position,
     part: usize,
 ) -> bool {

@@ -15,7 +15,9 @@ use super::outline::{coords_of, Prepared};
 use super::tiling::{Corner, Position, Tiling};
 use super::{LayoutMetrics, RegionMetrics};
 use geo::{Area, Coord, LineString, MultiPolygon, Winding};
-use std::collections::{HashMap, HashSet};
+// Fx hashing: the layout's shape is computed for every shift the landmass settling tries, and
+// SipHash was a fifth of a layout before refinement on the US counties.
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 /// What every layout of one layer is scored against, in map units: made once per run.
 pub struct Reference {
@@ -474,7 +476,7 @@ fn pieces(
         if !unvisited.remove(&start) {
             continue;
         }
-        let mut piece = HashSet::from([start]);
+        let mut piece = HashSet::from_iter([start]);
         let mut stack = vec![start];
         while let Some(p) = stack.pop() {
             for &next in tiling.edge_neighbours(p).iter() {
@@ -493,7 +495,7 @@ fn pieces(
 
 /// Empty positions next to a cell whose sides are all taken but at most one.
 fn notches(cells: &[Position], occupied: &HashSet<Position>, tiling: Tiling) -> u32 {
-    let mut seen = HashSet::new();
+    let mut seen = HashSet::default();
     let mut count = 0;
     for &p in cells {
         for &q in tiling.edge_neighbours(p).iter() {
@@ -517,7 +519,7 @@ fn notches(cells: &[Position], occupied: &HashSet<Position>, tiling: Tiling) -> 
 /// bounds one edge-connected region of empty space, as the rings of a polygon union do (a hole
 /// may touch the outer ring at such a corner, and stays a hole).
 fn boundary_loops(piece: &HashSet<Position>, tiling: Tiling) -> Vec<Vec<Corner>> {
-    let mut outgoing: HashMap<Corner, Vec<Corner>> = HashMap::new();
+    let mut outgoing: HashMap<Corner, Vec<Corner>> = HashMap::default();
     // In a fixed order, so that loops and their starts do not depend on the hash set's order.
     let mut cells: Vec<Position> = piece.iter().copied().collect();
     cells.sort_unstable_by_key(|&p| {
