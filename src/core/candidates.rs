@@ -35,6 +35,10 @@ use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 /// needle-thin region 1e231 units long.
 const MAX_SPAN: f64 = 1e6;
 
+/// The share of the input's preparation that checking the geometry takes (validity at 10⁷
+/// vertices: 3.5 s of about 9 s, BENCHMARKS.md "Dense boundaries"; a little less at 10⁶).
+const CHECKING_SHARE: f64 = 0.3;
+
 /// Draws of a noisy centroid before it is left where it was (a draw must land inside the outline).
 const NOISE_DRAWS: usize = 16;
 
@@ -96,6 +100,28 @@ fn generate_here(
     params: &Params,
     progress: Progress,
 ) -> Result<GridMap, Error> {
+    let mut levels = params.snake_noise_levels();
+    let mut jobs = layout_jobs(
+        levels.len(),
+        &params.shifts,
+        params.layout_count(regions.len()),
+    );
+    // Snake runs that no layout uses are not made.
+    let pairs = levels.len() * params.shifts.len();
+    levels.truncate(jobs.iter().map(|&(r, _)| r + 1).max().unwrap_or(1));
+    let refined = if params.refine {
+        params.refined_count(regions.len(), jobs.len())
+    } else {
+        0
+    };
+    // The bar's share of the input's preparation, which follows the vertices, not the regions.
+    let weights = StageWeights::new(params);
+    let layout_work = (levels.len() * params.max_steps) as f64
+        + jobs.len() as f64 * weights.plain()
+        + refined as f64 * weights.refinement();
+    let vertices: usize = regions.iter().map(|r| r.geometry.coords_count()).sum();
+    let preparation = StageWeights::preparation(vertices, regions.len());
+    let prepared_share = preparation / (preparation + layout_work);
     if !progress(0.0, "checking geometry") {
         return Err(Error::Cancelled);
     }
@@ -104,7 +130,9 @@ fn generate_here(
         frame,
         prepared,
         mut notes,
-    } = Input::of(regions, params, progress)?;
+    } = Input::of(regions, params, &|fraction, message| {
+        progress(prepared_share * fraction, message)
+    })?;
     let grouped = regions.iter().any(|r| r.group.is_some());
     let blocks = blocks_of(regions, &order, &prepared, grouped);
     let gap = grouped && params.group_gap > 0;
@@ -112,12 +140,6 @@ fn generate_here(
     let pins = pins::positions(regions, &order, tiling, grouped.then_some(&blocks), gap)?;
     let base = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
 
-    let mut levels = params.snake_noise_levels();
-    let mut jobs = layout_jobs(
-        levels.len(),
-        &params.shifts,
-        params.layout_count(regions.len()),
-    );
     if !pins.is_empty() {
         // Pins place the lattice: there is no origin to shift, and each shift's layout is
         // another start of the refinement (its own seed) instead.
@@ -130,7 +152,6 @@ fn generate_here(
             job.1 = [0.0, 0.0];
         }
     }
-    let pairs = levels.len() * params.shifts.len();
     if jobs.len() < pairs {
         notes.push(format!(
             "{} of the {pairs} candidate layouts were made (max_layouts{})",
@@ -142,13 +163,6 @@ fn generate_here(
             }
         ));
     }
-    // Snake runs that no layout uses are not made.
-    levels.truncate(jobs.iter().map(|&(r, _)| r + 1).max().unwrap_or(1));
-    let refined = if params.refine {
-        params.refined_count(regions.len(), jobs.len())
-    } else {
-        0
-    };
     if refined > 0 && refined < jobs.len() {
         notes.push(format!(
             "the best {refined} of the {} candidate layouts by the ranking before refinement \
@@ -161,13 +175,7 @@ fn generate_here(
             }
         ));
     }
-    let weights = StageWeights::new(params);
-    let tracker = Tracker::new(
-        progress,
-        (levels.len() * params.max_steps) as f64
-            + jobs.len() as f64 * weights.plain()
-            + refined as f64 * weights.refinement(),
-    );
+    let tracker = Tracker::new(progress, layout_work, prepared_share);
     let run_count = levels.len();
     let runs = levels
         .par_iter()
@@ -320,7 +328,8 @@ pub struct Input {
 }
 
 impl Input {
-    /// `progress` hears when the outline is begun.
+    /// `progress` hears the share of the preparation done: 0 as the geometry is checked,
+    /// [`CHECKING_SHARE`] as the outline is begun.
     pub fn of(regions: &[Region], params: &Params, progress: Progress) -> Result<Input, Error> {
         let Checked { geometries, notes } = validate(regions)?;
         let order = geometric_order(regions, &geometries);
@@ -342,10 +351,13 @@ impl Input {
             ));
         }
         let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
-        if !progress(0.0, "outline") {
+        if !progress(CHECKING_SHARE, "outline") {
             return Err(Error::Cancelled);
         }
-        let prepared = outline::prepare(&unit_refs, params);
+        // A cancel during the outline is heard at the next question after it.
+        let prepared = outline::prepare(&unit_refs, params, &|share, stage| {
+            progress(CHECKING_SHARE + (1.0 - CHECKING_SHARE) * share, stage);
+        });
         // The union and its outline are computed, not given: arithmetic at the edge of the
         // floating-point range (subnormal coordinates, found by fuzzing) can leave them empty
         // although every region has area, and every later step works on them.
@@ -530,6 +542,8 @@ fn noisy_centroids(prepared: &Prepared, base: &Network, md: f64, seed: u64) -> V
 /// worker threads; remembers a cancellation.
 struct Tracker<'a> {
     progress: Progress<'a>,
+    /// The bar's share already filled when the tracking begins.
+    start: f64,
     /// All the work, in units of one Snake step.
     total: f64,
     /// The work done, in millionths of a unit (an atomic float).
@@ -538,9 +552,10 @@ struct Tracker<'a> {
 }
 
 impl<'a> Tracker<'a> {
-    fn new(progress: Progress<'a>, total: f64) -> Self {
+    fn new(progress: Progress<'a>, total: f64, start: f64) -> Self {
         Tracker {
             progress,
+            start,
             total: total.max(1.0),
             done: AtomicU64::new(0),
             stopped: AtomicBool::new(false),
@@ -555,7 +570,7 @@ impl<'a> Tracker<'a> {
         }
         let millionths = (units.max(0.0) * 1e6).round() as u64;
         let done = self.done.fetch_add(millionths, Ordering::Relaxed) + millionths;
-        let fraction = (done as f64 / 1e6 / self.total).min(1.0);
+        let fraction = self.start + (1.0 - self.start) * (done as f64 / 1e6 / self.total).min(1.0);
         if !(self.progress)(fraction, message) {
             self.stopped.store(true, Ordering::Relaxed);
             return false;
@@ -617,6 +632,13 @@ impl StageWeights {
             Stage::Refining => self.refining,
             Stage::Scoring => Self::SCORING,
         }
+    }
+
+    /// Checking and preparing an input of `vertices` vertices and `regions` regions (reading it
+    /// is the host's share): about 1 µs a vertex (us_states densified to 10⁶ vertices), in
+    /// Snake steps of about 18 µs a region.
+    fn preparation(vertices: usize, regions: usize) -> f64 {
+        vertices as f64 / (18.0 * regions.max(1) as f64)
     }
 
     /// A layout before refinement: assigned and scored.

@@ -64,8 +64,14 @@ pub struct Prepared {
     pub part_of: Vec<usize>,
 }
 
-/// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area).
-pub fn prepare(regions: &[&MultiPolygon<f64>], params: &Params) -> Prepared {
+/// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area);
+/// `reached` hears the share of the work done as each costly stage begins (adjacency and union
+/// each about a third of it on dense boundaries, BENCHMARKS.md "Dense boundaries").
+pub fn prepare(
+    regions: &[&MultiPolygon<f64>],
+    params: &Params,
+    reached: &dyn Fn(f64, &str),
+) -> Prepared {
     let centroids: Vec<Coord<f64>> = regions.iter().map(|r| centroid(r)).collect();
     let area_centroids = regions
         .iter()
@@ -73,8 +79,11 @@ pub fn prepare(regions: &[&MultiPolygon<f64>], params: &Params) -> Prepared {
         .map(|(r, &fallback)| r.centroid().map_or(fallback, |p| p.0))
         .collect();
     let clusters = clusters(regions);
+    reached(0.05, "outline: adjacency");
     let adjacency = adjacency(regions, &clusters, params.point_adjacency);
+    reached(0.4, "outline: union");
     let regions_union = merge(regions, &clusters);
+    reached(0.8, "outline: simplifying");
     let landmass_of = landmasses(regions, &regions_union, &centroids);
     let union = clean(regions_union.clone(), &centroids);
     // Small layers still keep a quadrilateral per ring on average.
@@ -678,7 +687,7 @@ mod tests {
             .flat_map(|r| (0..3).map(move |c| square(c as f64, r as f64)))
             .collect();
         let refs: Vec<&MultiPolygon<f64>> = regions.iter().collect();
-        let prepared = prepare(&refs, &Params::default());
+        let prepared = prepare(&refs, &Params::default(), &|_, _| ());
         // 3×3 rook adjacency: 12 pairs; diagonal neighbours touch at a point only.
         assert_eq!(prepared.adjacency.len(), 12);
         assert!(prepared.adjacency.contains(&(0, 1)));
@@ -690,7 +699,7 @@ mod tests {
             point_adjacency: true,
             ..Params::default()
         };
-        assert_eq!(prepare(&refs, &with_points).adjacency.len(), 20);
+        assert_eq!(prepare(&refs, &with_points, &|_, _| ()).adjacency.len(), 20);
     }
 
     #[test]
@@ -725,7 +734,7 @@ mod tests {
             use geo::Scale;
             p.scale(0.01)
         }));
-        let prepared = prepare(&[&holed, &island], &Params::default());
+        let prepared = prepare(&[&holed, &island], &Params::default(), &|_, _| ());
         let holes: Vec<&Ring> = prepared.rings.iter().filter(|r| r.hole).collect();
         assert_eq!(holes.len(), 1, "the 1-cell² lake stays, the sliver goes");
         // The island region's centroid lies in its big square; the tiny part holds no centroid.
