@@ -448,6 +448,19 @@ macro_rules! accessors {
             },
         )
     };
+    // An optional count: none is `None`.
+    ($field:ident, OptionalInteger) => {
+        (
+            |p| p.$field.map_or(Value::Unset, |v| Value::Integer(v as u64)),
+            |p, v| {
+                p.$field = match v {
+                    // The range check has kept the value within the field's type.
+                    Value::Integer(v) => v.try_into().ok(),
+                    _ => None,
+                }
+            },
+        )
+    };
     ($field:ident, $variant:ident) => {
         (
             |p| Value::$variant(Clone::clone(&p.$field)),
@@ -753,19 +766,7 @@ pub static PARAMETERS: &[Parameter] = &[
              Snake runs in turn and the shifts spread over the cell. none: every pair up to \
              1,000 regions, then about 27,000 / regions (at least 1), since the lattice's \
              position matters less the more regions share it.",
-        access: (
-            |p| {
-                p.max_layouts
-                    .map_or(Value::Unset, |v| Value::Integer(v as u64))
-            },
-            |p, v| {
-                p.max_layouts = match v {
-                    // The range check has kept the value within 1..=1000.
-                    Value::Integer(v) => Some(v as usize),
-                    _ => None,
-                }
-            },
-        ),
+        access: accessors!(max_layouts, OptionalInteger),
     },
     Parameter {
         name: "max_refined",
@@ -782,19 +783,7 @@ pub static PARAMETERS: &[Parameter] = &[
              moves every candidate about alike). none: every candidate up to 222 regions, then \
              about 6,000 / regions (at least 1), since the refinement is most of a layout's \
              time.",
-        access: (
-            |p| {
-                p.max_refined
-                    .map_or(Value::Unset, |v| Value::Integer(v as u64))
-            },
-            |p, v| {
-                p.max_refined = match v {
-                    // The range check has kept the value within 1..=1000.
-                    Value::Integer(v) => Some(v as usize),
-                    _ => None,
-                }
-            },
-        ),
+        access: accessors!(max_refined, OptionalInteger),
     },
     Parameter {
         name: "seed",
