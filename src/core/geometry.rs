@@ -207,6 +207,22 @@ impl RingIndex {
             .map_or(f64::INFINITY, |(_, d2)| d2.sqrt())
     }
 
+    /// Like [`RingIndex::distance`], but only up to `reach`: the distance when it is below
+    /// `reach`, else `reach`. A box query, with no search heap: the Snake needs a node's
+    /// clearance only when it is under a few steps, and most nodes are far from every segment.
+    pub fn distance_within(
+        &self,
+        p: Coord<f64>,
+        reach: f64,
+        skip: impl Fn(&Segment) -> bool,
+    ) -> f64 {
+        let around = AABB::from_corners([p.x - reach, p.y - reach], [p.x + reach, p.y + reach]);
+        (self.tree.locate_in_envelope_intersecting(&around))
+            .filter(|s| !skip(s))
+            .map(|s| s.distance_2(&[p.x, p.y]).sqrt())
+            .fold(reach, f64::min)
+    }
+
     /// The nearest segment to `p`.
     pub fn nearest(&self, p: Coord<f64>) -> Option<&Segment> {
         self.tree.nearest_neighbor(&[p.x, p.y])
@@ -266,6 +282,20 @@ mod tests {
         assert!(!index.contains(Coord { x: 11.0, y: 5.0 }));
         // On the level of a vertex: counted once.
         assert!(index.contains(Coord { x: 2.0, y: 4.0 }));
+    }
+
+    #[test]
+    fn a_bounded_distance_is_the_distance_below_its_reach() {
+        let index = RingIndex::new(&[square(0.0, 0.0, 10.0), square(4.0, 4.0, 2.0)]);
+        // (1, 5): 1 from the outer ring's left side, 3 from the hole's left side (hand count).
+        let p = Coord { x: 1.0, y: 5.0 };
+        assert_eq!(index.distance(p, |_| false), 1.0);
+        assert_eq!(index.distance_within(p, 5.0, |_| false), 1.0);
+        assert_eq!(index.distance_within(p, 0.5, |_| false), 0.5);
+        // Skipping the outer ring leaves the hole.
+        let hole_only = |s: &Segment| s.ring == 0;
+        assert_eq!(index.distance_within(p, 5.0, hole_only), 3.0);
+        assert_eq!(index.distance_within(p, 2.0, hole_only), 2.0);
     }
 
     #[test]

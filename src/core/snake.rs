@@ -13,7 +13,7 @@ use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Side};
 use geo::Coord;
 use rstar::primitives::GeomWithData;
-use rstar::RTree;
+use rstar::{RTree, AABB};
 
 /// Halvings of a step that stays invalid before the Snake gives up (§4).
 const HALVINGS: usize = 4;
@@ -22,6 +22,9 @@ const PROGRESS_WINDOW: usize = 3;
 /// Shortest beam length used in the stiffness, in cells: coincident nodes would make the
 /// bending terms (1/h³) blow up.
 const SHORTEST_BEAM: f64 = 1e-6;
+/// How far, in multiples of its step, a node's clearance is searched: above the 3 at which a
+/// clearance starts to limit the step, with room for rounding.
+const REACH: f64 = 4.0;
 
 /// The network after the Snake.
 #[derive(Clone, Debug)]
@@ -307,13 +310,17 @@ fn apply_valid_step(
             .map(|(n, c)| GeomWithData::new([c.x, c.y], n))
             .collect(),
     );
+    // A node is limited only when its clearance is under three times its step, so clearances
+    // are searched no farther than `REACH` steps: the same limits, found by box queries.
+    let reach = |v: Coord<f64>| REACH * length(v);
     for (r, ring) in network.rings.iter().enumerate() {
         let len = ring.nodes.len();
         // Each segment's distance to the nearest node that is not one of its ends.
         let segment_clearance: Vec<f64> = (0..len)
             .map(|k| {
                 let ends = [ring.nodes[k], ring.nodes[(k + 1) % len]];
-                segment_to_points(positions[ends[0]], positions[ends[1]], &points, |n| {
+                let most = reach(step[ends[0]]).max(reach(step[ends[1]]));
+                segment_to_points(positions[ends[0]], positions[ends[1]], most, &points, |n| {
                     ends.contains(&n)
                 })
             })
@@ -323,14 +330,17 @@ fn apply_valid_step(
                 s.ring == r && (s.index == k || (s.index + 1) % len == k)
             };
             let clearance = index
-                .distance(positions[node], own)
+                .distance_within(positions[node], reach(step[node]), own)
                 .min(segment_clearance[k])
                 .min(segment_clearance[(k + len - 1) % len]);
             limit(&mut step[node], clearance / 3.0);
         }
     }
     for (c, v) in step[..m].iter_mut().enumerate() {
-        limit(v, index.distance(positions[c], |_| false) / 3.0);
+        limit(
+            v,
+            index.distance_within(positions[c], reach(*v), |_| false) / 3.0,
+        );
     }
     for _ in 0..=HALVINGS {
         let moved: Vec<Coord<f64>> = positions.iter().zip(&step).map(|(p, v)| *p + *v).collect();
@@ -352,32 +362,33 @@ fn limit(v: &mut Coord<f64>, most: f64) {
     }
 }
 
-/// Distance from the segment `a`–`b` to the nearest of `points` that `skip` does not reject:
-/// search outwards from the midpoint until points are farther than the best distance plus half
-/// the segment.
+/// Distance from the segment `a`–`b` to the nearest of `points` that `skip` does not reject,
+/// or `reach` when none is nearer (see [`RingIndex::distance_within`]).
 fn segment_to_points(
     a: Coord<f64>,
     b: Coord<f64>,
+    reach: f64,
     points: &RTree<GeomWithData<[f64; 2], usize>>,
     skip: impl Fn(usize) -> bool,
 ) -> f64 {
-    let mid = (a + b) / 2.0;
-    let half = length(b - a) / 2.0;
-    let mut best = f64::INFINITY;
-    for (p, d2) in points.nearest_neighbor_iter_with_distance_2(&[mid.x, mid.y]) {
-        if d2.sqrt() - half > best {
-            break;
-        }
-        if skip(p.data) {
-            continue;
-        }
-        let at = Coord {
-            x: p.geom()[0],
-            y: p.geom()[1],
-        };
-        best = best.min(point_segment_distance2(at, a, b).sqrt());
-    }
-    best
+    let around = AABB::from_corners(
+        [a.x.min(b.x) - reach, a.y.min(b.y) - reach],
+        [a.x.max(b.x) + reach, a.y.max(b.y) + reach],
+    );
+    (points.locate_in_envelope(&around))
+        .filter(|p| !skip(p.data))
+        .map(|p| {
+            point_segment_distance2(
+                Coord {
+                    x: p.geom()[0],
+                    y: p.geom()[1],
+                },
+                a,
+                b,
+            )
+            .sqrt()
+        })
+        .fold(reach, f64::min)
 }
 
 #[cfg(test)]
