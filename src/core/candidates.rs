@@ -176,37 +176,6 @@ fn generate_here(
         ));
     }
     let tracker = Tracker::new(progress, layout_work, prepared_share);
-    let run_count = levels.len();
-    let runs = levels
-        .par_iter()
-        .enumerate()
-        .map(|(k, &md)| {
-            let network = if md == 0.0 {
-                base.clone()
-            } else {
-                let centroids = noisy_centroids(&prepared, &base, md, seed(params.seed, 1, k));
-                network::build(&centroids, &prepared.rings, &prepared.adjacency)?
-            };
-            let neighbours = forces::neighbours(&network, &prepared.adjacency);
-            let started = AtomicUsize::new(0);
-            let run = snake::run(&network, &neighbours, params, &|| {
-                let step = started.fetch_add(1, Ordering::Relaxed) + 1;
-                let of_run = if run_count > 1 {
-                    format!(" (run {} of {run_count})", k + 1)
-                } else {
-                    String::new()
-                };
-                let message = format!("Snake step {step} of {}{of_run}", params.max_steps);
-                // Each step counts as it starts.
-                tracker.advance(1.0, &message)
-            })?;
-            // A run that stops early hands its steps never started to the progress count.
-            let unused = params.max_steps.saturating_sub(started.into_inner());
-            tracker.advance(unused as f64, "Snake");
-            Ok((md, network, run))
-        })
-        .collect::<Result<Vec<_>, Error>>()?;
-
     let context = Context {
         blocks,
         grouped,
@@ -217,28 +186,64 @@ fn generate_here(
         home: metrics::Landmasses::new(&prepared.regions_union, prepared.landmass_of.clone()),
         params,
     };
-    let layouts = jobs
+    let run_count = levels.len();
+    // Each Snake run's layouts start as soon as the run ends, so that a core that has finished
+    // its runs lays out instead of waiting for the last run (3 runs on 2 cores left one idle
+    // for a whole run). Which layout is made where changes nothing in it.
+    let runs = levels
         .par_iter()
         .enumerate()
-        .map(|(k, &(r, shift))| {
-            if tracker.cancelled() {
-                return Err(Error::Cancelled);
-            }
-            let (_, network, run) = &runs[r];
-            let name = format!("layout {} of {}", k + 1, jobs.len());
-            let report = |stage: Stage, share: f64| {
-                tracker.advance(
-                    share * weights.of(stage),
-                    &format!("{name}: {}", stage.name()),
-                )
+        .map(|(r, &md)| {
+            let network = if md == 0.0 {
+                base.clone()
+            } else {
+                let centroids = noisy_centroids(&prepared, &base, md, seed(params.seed, 1, r));
+                network::build(&centroids, &prepared.rings, &prepared.adjacency)?
             };
-            let layout = context.layout(network, run, shift, &report)?;
-            if !report(Stage::Scoring, 1.0) {
-                return Err(Error::Cancelled);
-            }
-            Ok(layout)
+            let neighbours = forces::neighbours(&network, &prepared.adjacency);
+            let started = AtomicUsize::new(0);
+            let run = snake::run(&network, &neighbours, params, &|| {
+                let step = started.fetch_add(1, Ordering::Relaxed) + 1;
+                let of_run = if run_count > 1 {
+                    format!(" (run {} of {run_count})", r + 1)
+                } else {
+                    String::new()
+                };
+                let message = format!("Snake step {step} of {}{of_run}", params.max_steps);
+                // Each step counts as it starts.
+                tracker.advance(1.0, &message)
+            })?;
+            // A run that stops early hands its steps never started to the progress count.
+            let unused = params.max_steps.saturating_sub(started.into_inner());
+            tracker.advance(unused as f64, "Snake");
+            let layouts = (jobs.iter().enumerate())
+                .filter(|(_, job)| job.0 == r)
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|(k, &(_, shift))| {
+                    if tracker.cancelled() {
+                        return Err(Error::Cancelled);
+                    }
+                    let name = format!("layout {} of {}", k + 1, jobs.len());
+                    let report = |stage: Stage, share: f64| {
+                        tracker.advance(
+                            share * weights.of(stage),
+                            &format!("{name}: {}", stage.name()),
+                        )
+                    };
+                    let layout = context.layout(&network, &run, shift, &report)?;
+                    if !report(Stage::Scoring, 1.0) {
+                        return Err(Error::Cancelled);
+                    }
+                    Ok(layout)
+                })
+                .collect::<Result<Vec<_>, Error>>()?;
+            Ok(((md, run), layouts))
         })
         .collect::<Result<Vec<_>, Error>>()?;
+    // The jobs are in run-major order, so the runs' layouts in turn are in the jobs' order.
+    let (runs, layouts): (Vec<(f64, SnakeRun)>, Vec<Vec<Layout>>) = runs.into_iter().unzip();
+    let layouts: Vec<Layout> = layouts.into_iter().flatten().collect();
 
     // The refinement moves every candidate about alike, so the best before it are the best
     // after (see REFINED_REGION_LAYOUTS): only those are refined, each with its own seed.
@@ -284,7 +289,7 @@ fn generate_here(
     let candidates = ranking
         .iter()
         .map(|&k| {
-            let (md, _, run) = &runs[jobs[kept[k]].0];
+            let (md, run) = &runs[jobs[kept[k]].0];
             CandidateReport {
                 noise: *md,
                 shift: jobs[kept[k]].1,
@@ -295,7 +300,7 @@ fn generate_here(
         })
         .collect();
     let best = &layouts[ranking[0]];
-    let (_, _, run) = &runs[jobs[kept[ranking[0]]].0];
+    let (_, run) = &runs[jobs[kept[ranking[0]]].0];
     Ok(context.grid_map(regions, &order, best, run, candidates, notes))
 }
 
