@@ -147,6 +147,7 @@ fn anneal(
     let moves = moves(params, regions);
     // Reused by every proposal: a move allocates nothing.
     let mut scope = Scope::default();
+    let mut terms = Terms::of(problem, &board);
     for step in 0..moves {
         if step % TICK_MOVES == TICK_MOVES - 1 && !tick(TICK_MOVES as f64 / moves as f64) {
             return None;
@@ -156,15 +157,16 @@ fn anneal(
             continue;
         };
         problem.fill_scope(proposal, &board, &mut scope);
-        let before = problem.local_energy(&scope, &board);
+        let before = problem.kept_energy(&scope, &board, &terms);
         let undo = board.apply(proposal);
-        let delta = problem.local_energy(&scope, &board) - before;
+        let delta = problem.local_energy(&scope, &board, &mut terms.staged) - before;
         let accept = delta <= 0.0
             || (temperature > 0.0 && rng.random::<f64>() < (-delta / temperature).exp());
         if !accept {
             board.apply(undo);
             continue;
         }
+        terms.commit(problem);
         energy += delta;
         since_best.push(undo);
         // Gains below rounding noise do not make a new best: they would only be drift.
@@ -242,19 +244,40 @@ struct Problem<'a> {
     w_location: f64,
     w_landmass: f64,
     w_notch: f64,
-    /// Per region, each adjacent region and the original direction towards it.
-    neighbours: Vec<Vec<(usize, Coord<f64>)>>,
+    /// Each region's adjacent regions and the original directions towards them, region after
+    /// region: those of region `i` are `links[first[i]..first[i + 1]]`.
+    links: Vec<(usize, Coord<f64>)>,
+    first: Vec<usize>,
+    /// Per link, the index of the same pair seen from the other region.
+    reverse: Vec<usize>,
     /// [`Layout::misplaced`], asked once per region and position.
     misplaced: RefCell<FxHashMap<(usize, Position), bool>>,
 }
 
 impl<'a> Problem<'a> {
     fn new(layout: &'a Layout<'a>, params: &Params) -> Self {
-        let mut neighbours = vec![Vec::new(); layout.centroids.len()];
-        for &(i, j) in layout.adjacency.iter().filter(|(i, j)| i != j) {
+        let regions = layout.centroids.len();
+        let pairs = || layout.adjacency.iter().filter(|(i, j)| i != j);
+        let mut first = vec![0; regions + 1];
+        for &(i, j) in pairs() {
+            first[i + 1] += 1;
+            first[j + 1] += 1;
+        }
+        for k in 0..regions {
+            first[k + 1] += first[k];
+        }
+        let mut next = first.clone();
+        let mut links = vec![(0, Coord::default()); first[regions]];
+        let mut reverse = vec![0; first[regions]];
+        for &(i, j) in pairs() {
             let direction = layout.centroids[j] - layout.centroids[i];
-            neighbours[i].push((j, direction));
-            neighbours[j].push((i, -direction));
+            let (at_i, at_j) = (next[i], next[j]);
+            links[at_i] = (j, direction);
+            links[at_j] = (i, -direction);
+            reverse[at_i] = at_j;
+            reverse[at_j] = at_i;
+            next[i] += 1;
+            next[j] += 1;
         }
         Problem {
             layout,
@@ -262,9 +285,16 @@ impl<'a> Problem<'a> {
             w_location: params.refine_w_location / layout.lattice.cell_size.powi(2),
             w_landmass: params.refine_w_landmass,
             w_notch: params.refine_w_notch,
-            neighbours,
+            links,
+            first,
+            reverse,
             misplaced: RefCell::default(),
         }
+    }
+
+    /// The regions adjacent to `region`, each with the original direction towards it.
+    fn neighbours(&self, region: usize) -> &[(usize, Coord<f64>)] {
+        &self.links[self.first[region]..self.first[region + 1]]
     }
 
     fn cell(&self, index: usize) -> LatticeCell {
@@ -348,22 +378,100 @@ impl<'a> Problem<'a> {
 
     /// The part of the energy within `scope`, on `board` as it is: the placements and every pair
     /// of the regions, a pair between two of them counted once, and the notches among the
-    /// positions.
-    fn local_energy(&self, scope: &Scope, board: &Board) -> f64 {
+    /// positions. Each placement and pair term is also put in `staged`, for [`Terms::commit`].
+    fn local_energy(&self, scope: &Scope, board: &Board, staged: &mut Staged) -> f64 {
+        staged.placements.clear();
+        staged.pairs.clear();
         let mut energy = 0.0;
         for (k, &region) in scope.regions.iter().enumerate() {
             let here = self.cell(board.at[region]);
-            energy += self.placement(region, here);
-            for &(other, direction) in &self.neighbours[region] {
+            let placement = self.placement(region, here);
+            staged.placements.push((region, placement));
+            energy += placement;
+            for link in self.first[region]..self.first[region + 1] {
+                let (other, direction) = self.links[link];
                 if !scope.regions[..k].contains(&other) {
-                    energy += self.pair(direction, here, self.cell(board.at[other]));
+                    let pair = self.pair(direction, here, self.cell(board.at[other]));
+                    staged.pairs.push((link, pair));
+                    energy += pair;
                 }
             }
         }
+        energy + self.notch_energy(scope, board)
+    }
+
+    /// [`Problem::local_energy`] on the board whose terms `terms` holds, summed in the same
+    /// order from the kept terms, so that it is the same to the bit.
+    fn kept_energy(&self, scope: &Scope, board: &Board, terms: &Terms) -> f64 {
+        let mut energy = 0.0;
+        for (k, &region) in scope.regions.iter().enumerate() {
+            energy += terms.placements[region];
+            for link in self.first[region]..self.first[region + 1] {
+                if !scope.regions[..k].contains(&self.links[link].0) {
+                    energy += terms.pairs[link];
+                }
+            }
+        }
+        energy + self.notch_energy(scope, board)
+    }
+
+    /// The notches among `scope`'s positions, weighted.
+    fn notch_energy(&self, scope: &Scope, board: &Board) -> f64 {
         let notches = (scope.around.iter())
             .filter(|&&p| !board.occupied(p) && is_notch(self.tiling(), p, |q| board.occupied(q)))
             .count();
-        energy + self.w_notch * notches as f64
+        self.w_notch * notches as f64
+    }
+}
+
+/// Every placement and pair term of the current assignment, so that a proposal's energy before
+/// it is read, not computed again: most proposals are turned down, and computing both sides
+/// was most of a refinement.
+struct Terms {
+    /// Per region.
+    placements: Vec<f64>,
+    /// Per link of [`Problem::links`] (a pair is held under both its links).
+    pairs: Vec<f64>,
+    /// The terms of the proposal last evaluated, which become current if it is accepted.
+    staged: Staged,
+}
+
+/// The terms [`Problem::local_energy`] computed: (region, placement) and (link, pair).
+#[derive(Default)]
+struct Staged {
+    placements: Vec<(usize, f64)>,
+    pairs: Vec<(usize, f64)>,
+}
+
+impl Terms {
+    fn of(problem: &Problem, board: &Board) -> Terms {
+        let cell = |region: usize| problem.cell(board.at[region]);
+        Terms {
+            placements: (0..board.at.len())
+                .map(|region| problem.placement(region, cell(region)))
+                .collect(),
+            pairs: (0..board.at.len())
+                .flat_map(|region| {
+                    (problem.neighbours(region).iter())
+                        .map(move |&(other, direction)| {
+                            problem.pair(direction, cell(region), cell(other))
+                        })
+                        .collect::<Vec<_>>()
+                })
+                .collect(),
+            staged: Staged::default(),
+        }
+    }
+
+    /// Makes the staged terms current: the proposal they were computed for was accepted.
+    fn commit(&mut self, problem: &Problem) {
+        for &(region, placement) in &self.staged.placements {
+            self.placements[region] = placement;
+        }
+        for &(link, pair) in &self.staged.pairs {
+            self.pairs[link] = pair;
+            self.pairs[problem.reverse[link]] = pair;
+        }
     }
 }
 
@@ -526,7 +634,7 @@ impl<'a> Board<'a> {
             let sides = self.lattice.tiling.sides().len();
             return self.push(problem, region, rng.random_range(0..sides));
         }
-        let neighbours = &problem.neighbours[region];
+        let neighbours = problem.neighbours(region);
         let (col, row) = if !neighbours.is_empty() && rng.random_bool(0.5) {
             let (other, direction) = neighbours[rng.random_range(0..neighbours.len())];
             let there = self.lattice.cells[self.at[other]];
@@ -805,6 +913,7 @@ mod tests {
         let mut board = Board::new(&map.lattice, &cells, pool);
         let mut rng = ChaCha8Rng::seed_from_u64(9);
         let (mut swaps, mut adjacent_swaps, mut shifts) = (0, 0, 0);
+        let mut terms = Terms::of(&problem, &board);
         for _ in 0..3_000 {
             let Some(proposal) = board.propose(&problem, &mut rng, true) else {
                 continue;
@@ -813,10 +922,20 @@ mod tests {
             let shape_before = shape(&map.lattice, &board.at);
             let mut scope = Scope::default();
             problem.fill_scope(proposal, &board, &mut scope);
-            let before = problem.local_energy(&scope, &board);
+            let mut staged = Staged::default();
+            let before = problem.local_energy(&scope, &board, &mut staged);
+            // The kept terms give the same energy to the bit.
+            assert_eq!(problem.kept_energy(&scope, &board, &terms), before);
             let from = board.at.clone();
             board.apply(proposal);
-            let delta = problem.local_energy(&scope, &board) - before;
+            let delta = problem.local_energy(&scope, &board, &mut terms.staged) - before;
+            terms.commit(&problem);
+            // Every kept term is the one the board now has.
+            let fresh = Terms::of(&problem, &board);
+            assert_eq!(
+                (&terms.placements, &terms.pairs),
+                (&fresh.placements, &fresh.pairs)
+            );
             assert!((problem.energy(&board.at) - total_before - delta).abs() < 1e-9);
             assert!(distinct(&board.at));
             // No move adds a piece or a hole.
@@ -825,7 +944,7 @@ mod tests {
             match proposal {
                 Move::Swap(a, b) => {
                     swaps += 1;
-                    adjacent_swaps += usize::from(problem.neighbours[a].iter().any(|n| n.0 == b));
+                    adjacent_swaps += usize::from(problem.neighbours(a).iter().any(|n| n.0 == b));
                 }
                 Move::Chain(chain) => {
                     shifts += 1;
