@@ -609,17 +609,17 @@ impl Stage {
 /// The time of each stage of a layout, in Snake steps, so that the progress fraction follows
 /// the clock. All three grow about linearly with the regions, as a Snake step does, so the
 /// ratios hold for any layer; they were measured on the 3,107 US counties on one thread (a
-/// Snake step about 56 ms; a layout's lattice, assignment and landmass settling 0.3 s, its
-/// metrics about 0.05 s, the 800 refinement moves per region 1.3 s).
+/// Snake step about 22 ms; a layout's lattice, assignment and landmass settling 0.27 s, its
+/// metrics about 0.02 s, the 800 refinement moves per region 1.1 s).
 struct StageWeights {
     refining: f64,
 }
 
 impl StageWeights {
-    const ASSIGNING: f64 = 5.0;
+    const ASSIGNING: f64 = 12.0;
     const SCORING: f64 = 1.0;
     /// Per refinement move per region.
-    const REFINING_PER_MOVE: f64 = 24.0 / 800.0;
+    const REFINING_PER_MOVE: f64 = 50.0 / 800.0;
 
     fn new(params: &Params) -> Self {
         StageWeights {
@@ -641,9 +641,9 @@ impl StageWeights {
 
     /// Checking and preparing an input of `vertices` vertices and `regions` regions (reading it
     /// is the host's share): about 1 µs a vertex (us_states densified to 10⁶ vertices), in
-    /// Snake steps of about 18 µs a region.
+    /// Snake steps of about 7 µs a region.
     fn preparation(vertices: usize, regions: usize) -> f64 {
-        vertices as f64 / (18.0 * regions.max(1) as f64)
+        vertices as f64 / (7.0 * regions.max(1) as f64)
     }
 
     /// A layout before refinement: assigned and scored.
