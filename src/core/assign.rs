@@ -20,7 +20,9 @@
 //! cell along a Z-order curve, which keeps each part of the map's share of both to within one
 //! at every scale; random halves left imbalances of about √k in a part of k, whose transport
 //! the prices then carried, so the augmenting paths grew with the layer (33,000 regions: 380
-//! rows scanned per path against 38 now). When every region has a cell,
+//! rows scanned per path against 38 now). When a like problem was solved (the same points on
+//! a lattice shifted by part of a cell), its prices start the solver instead ([`Prices`]).
+//! When every region has a cell,
 //! the duals u, v prove optimality for the full problem if no pair has a negative reduced cost
 //! c_ij − u_i − v_j. A lifted R-tree finds each region's most negative cells in O(log n); every
 //! region that has some gains them as candidates, gives its cell back and is assigned again.
@@ -56,6 +58,17 @@ const NONE: usize = usize::MAX;
 /// A 3-d R-tree of cells lifted by their prices (see [`lifted_cells`]).
 type LiftedTree = RTree<GeomWithData<[f64; 3], usize>>;
 
+/// The cells' prices at the end of a sparse solve, by the cells' places. They are the transport
+/// potential from the points to the cells, which a like problem shares (the same points and a
+/// lattice shifted by part of a cell), so they start its solver in place of the coarser
+/// problem's prices: on the US counties an assignment so started takes 0.12 s instead of
+/// 0.22 s, and finds the same optimum.
+#[derive(Clone, Debug)]
+pub struct Prices {
+    cells: Vec<Coord<f64>>,
+    values: Vec<f64>,
+}
+
 /// Returns, for every point, the index of its cell: distinct cells minimising the sum of squared
 /// distances. `points` and `cells` have the same length. Deterministic.
 ///
@@ -70,6 +83,17 @@ type LiftedTree = RTree<GeomWithData<[f64; 3], usize>>;
 /// # Panics
 /// If `points` and `cells` differ in length.
 pub fn assign(points: &[Coord<f64>], cells: &[Coord<f64>], tick: Tick) -> Option<Vec<usize>> {
+    assign_from(points, cells, None, tick).map(|(cell_of, _)| cell_of)
+}
+
+/// [`assign`], started from the prices of a like problem when there are some, and returning its
+/// own prices for the next (none from the dense solver, under [`DENSE_LIMIT`] points).
+pub fn assign_from(
+    points: &[Coord<f64>],
+    cells: &[Coord<f64>],
+    start: Option<&Prices>,
+    tick: Tick,
+) -> Option<(Vec<usize>, Option<Prices>)> {
     assert_eq!(
         points.len(),
         cells.len(),
@@ -79,10 +103,16 @@ pub fn assign(points: &[Coord<f64>], cells: &[Coord<f64>], tick: Tick) -> Option
     if points.len() <= DENSE_LIMIT {
         // At most 500², a few milliseconds: asked once.
         let cells = dense(&costs);
-        tick(1.0).then_some(cells)
+        tick(1.0).then_some((cells, None))
     } else {
-        // The coarser problems only decide how fast the optimum is found, never which it is.
-        Sparse::solved(&costs, tick).map(|s| s.col_of)
+        // The starting prices only decide how fast the optimum is found, never which it is.
+        let start = start.map(|p| interpolated(&p.cells, &p.values, cells));
+        let solver = Sparse::solved(&costs, start, tick)?;
+        let prices = Prices {
+            cells: cells.to_vec(),
+            values: solver.v,
+        };
+        Some((solver.col_of, Some(prices)))
     }
 }
 
@@ -186,10 +216,14 @@ impl PartialOrd for Entry {
 }
 
 impl<'a> Sparse<'a> {
-    /// Solves the problem, starting from the prices of a coarser one; `None` when `tick`
-    /// cancels (see [`assign`]).
-    fn solved(costs: &'a Costs<'a>, tick: Tick) -> Option<Self> {
-        let mut solver = Sparse::new(costs, estimated_prices(costs, tick)?);
+    /// Solves the problem, starting from `start` or else from the prices of a coarser one;
+    /// `None` when `tick` cancels (see [`assign`]).
+    fn solved(costs: &'a Costs<'a>, start: Option<Vec<f64>>, tick: Tick) -> Option<Self> {
+        let prices = match start {
+            Some(prices) => prices,
+            None => estimated_prices(costs, tick)?,
+        };
+        let mut solver = Sparse::new(costs, prices);
         solver.run(tick).then_some(solver)
     }
 
@@ -378,10 +412,7 @@ impl<'a> Sparse<'a> {
 }
 
 /// Column prices for `costs` from the same problem on half of its points and cells (see the
-/// module notes): every cell takes the value at its place of the least-squares plane through
-/// the prices of the [`PLANE_POINTS`] nearest sampled cells, since the potential is smooth and
-/// the nearest cell's price alone is off by the potential's slope over the gap (on the US
-/// counties the augmenting paths then scan ten times as many rows).
+/// module notes), [`interpolated`] to all of its cells.
 fn estimated_prices(costs: &Costs, tick: Tick) -> Option<Vec<f64>> {
     let n = costs.len();
     if n < COARSEST {
@@ -415,14 +446,23 @@ fn estimated_prices(costs: &Costs, tick: Tick) -> Option<Vec<f64>> {
     let (points, cells) = (sample(costs.points), sample(costs.cells));
     let coarse = Costs::new(&points, &cells);
     // The coarse problem's share of the work is not counted: only a cancel is heard.
-    let prices = Sparse::solved(&coarse, &|_| tick(0.0))?.v;
+    let prices = Sparse::solved(&coarse, None, &|_| tick(0.0))?.v;
+    Some(interpolated(&cells, &prices, costs.cells))
+}
+
+/// Prices for `cells` from those of the `sampled` cells: each cell takes the value at its place
+/// of the least-squares plane through the prices of the [`PLANE_POINTS`] nearest sampled cells,
+/// since the potential is smooth and the nearest cell's price alone is off by the potential's
+/// slope over the gap (on the US counties the augmenting paths then scan ten times as many
+/// rows).
+fn interpolated(sampled: &[Coord<f64>], prices: &[f64], cells: &[Coord<f64>]) -> Vec<f64> {
     let tree = RTree::bulk_load(
-        (cells.iter().enumerate())
+        (sampled.iter().enumerate())
             .filter(|(_, c)| finite(**c))
             .map(|(k, c)| GeomWithData::new([c.x, c.y], k))
             .collect(),
     );
-    let prices = (costs.cells.iter())
+    (cells.iter())
         .map(|c| {
             if !finite(*c) {
                 return 0.0;
@@ -442,8 +482,7 @@ fn estimated_prices(costs: &Costs, tick: Tick) -> Option<Vec<f64>> {
                 .collect();
             plane_at_origin(&near).unwrap_or_else(|| near.first().map_or(0.0, |n| n.1))
         })
-        .collect();
-    Some(prices)
+        .collect()
 }
 
 /// Sampled cells a cell's price is interpolated from.
@@ -692,6 +731,39 @@ mod tests {
                 assert!(solver.reduced(i, j) > -1e-6, "({i}, {j})");
             }
         }
+    }
+
+    #[test]
+    fn prices_from_a_shifted_lattice_start_the_solver_at_no_cost_to_the_optimum() {
+        let mut rng = ChaCha8Rng::seed_from_u64(10);
+        let n = DENSE_LIMIT + 300;
+        let (points, cells) = crowded(&mut rng, n);
+        let (_, prices) = assign_from(&points, &cells, None, &|_| true).expect("not cancelled");
+        let prices = prices.expect("the sparse solver gives its prices");
+        // The lattice shifted by part of a cell, as a run's other layouts have it.
+        let shifted: Vec<Coord<f64>> = (cells.iter())
+            .map(|c| Coord {
+                x: c.x + 0.33,
+                y: c.y + 0.67,
+            })
+            .collect();
+        let (warm, _) =
+            assign_from(&points, &shifted, Some(&prices), &|_| true).expect("not cancelled");
+        let cold = assign(&points, &shifted, &|_| true).expect("not cancelled");
+        assert!(is_permutation(&warm));
+        let optimum = total(&points, &shifted, &solve(&points, &shifted));
+        let (w, c) = (
+            total(&points, &shifted, &warm),
+            total(&points, &shifted, &cold),
+        );
+        assert!(
+            (w - optimum).abs() < 1e-9 * optimum,
+            "warm {w}, optimum {optimum}"
+        );
+        assert!(
+            (c - optimum).abs() < 1e-9 * optimum,
+            "cold {c}, optimum {optimum}"
+        );
     }
 
     #[test]

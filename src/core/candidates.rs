@@ -3,6 +3,7 @@
 //! independent and computed in parallel; the result does not depend on the order of the input
 //! regions or their ids, because everything works on the regions in a geometric order.
 
+use super::assign::Prices;
 use super::frame::Frame;
 use super::grid::{self, Lattice, LatticeCell};
 use super::groups;
@@ -216,28 +217,37 @@ fn generate_here(
             // A run that stops early hands its steps never started to the progress count.
             let unused = params.max_steps.saturating_sub(started.into_inner());
             tracker.advance(unused as f64, "Snake");
-            let layouts = (jobs.iter().enumerate())
+            let lay_out = |k: usize, shift: [f64; 2], start: &[Option<Prices>]| {
+                if tracker.cancelled() {
+                    return Err(Error::Cancelled);
+                }
+                let name = format!("layout {} of {}", k + 1, jobs.len());
+                let report = |stage: Stage, share: f64| {
+                    tracker.advance(
+                        share * weights.of(stage),
+                        &format!("{name}: {}", stage.name()),
+                    )
+                };
+                let laid = context.layout(&network, &run, shift, start, &report)?;
+                if !report(Stage::Scoring, 1.0) {
+                    return Err(Error::Cancelled);
+                }
+                Ok(laid)
+            };
+            let mine: Vec<(usize, [f64; 2])> = (jobs.iter().enumerate())
                 .filter(|(_, job)| job.0 == r)
-                .collect::<Vec<_>>()
-                .into_par_iter()
-                .map(|(k, &(_, shift))| {
-                    if tracker.cancelled() {
-                        return Err(Error::Cancelled);
-                    }
-                    let name = format!("layout {} of {}", k + 1, jobs.len());
-                    let report = |stage: Stage, share: f64| {
-                        tracker.advance(
-                            share * weights.of(stage),
-                            &format!("{name}: {}", stage.name()),
-                        )
-                    };
-                    let layout = context.layout(&network, &run, shift, &report)?;
-                    if !report(Stage::Scoring, 1.0) {
-                        return Err(Error::Cancelled);
-                    }
-                    Ok(layout)
-                })
+                .map(|(k, job)| (k, job.1))
+                .collect();
+            let Some((&(first, shift), rest)) = mine.split_first() else {
+                return Ok(((md, run), Vec::new()));
+            };
+            // The run's other shifts assign the same moved centroids to a lattice shifted by
+            // part of a cell: the first one's prices start them (see assign::Prices).
+            let (first, prices) = lay_out(first, shift, &[])?;
+            let rest = (rest.par_iter())
+                .map(|&(k, shift)| lay_out(k, shift, &prices).map(|(layout, _)| layout))
                 .collect::<Result<Vec<_>, Error>>()?;
+            let layouts: Vec<Layout> = std::iter::once(first).chain(rest).collect();
             Ok(((md, run), layouts))
         })
         .collect::<Result<Vec<_>, Error>>()?;
@@ -744,14 +754,17 @@ struct Context<'a> {
 
 impl Context<'_> {
     /// Lattice, assignment and metrics for one Snake run and one origin shift (§6), before
-    /// refinement; [`Error::Cancelled`] once `report` returns false.
+    /// refinement, with the assignment's prices per landmass (none with groups); `start` holds
+    /// those of a layout of the same run, if any. [`Error::Cancelled`] once `report` returns
+    /// false.
     fn layout(
         &self,
         network: &Network,
         run: &SnakeRun,
         shift: [f64; 2],
+        start: &[Option<Prices>],
         report: &dyn Fn(Stage, f64) -> bool,
-    ) -> Result<Layout, Error> {
+    ) -> Result<(Layout, Vec<Option<Prices>>), Error> {
         let m = network.centroids;
         let mut moved: Cow<[Coord<f64>]> = Cow::Borrowed(&run.positions[..m]);
         let mut moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
@@ -813,19 +826,20 @@ impl Context<'_> {
                 selection.assigned
             )));
         }
-        let cells = if self.grouped {
+        let (cells, prices) = if self.grouped {
             if !gap {
                 // Without gaps the blocks share out exactly the landmasses' cells.
                 lattice.cells.truncate(selection.assigned);
             }
             let pinned: FxHashMap<Position, usize> =
                 self.pins.iter().map(|&(i, p)| (p, i)).collect();
-            groups::assign(&mut lattice, &self.blocks, moved, gap, &pinned, &|done| {
+            let cells = groups::assign(&mut lattice, &self.blocks, moved, gap, &pinned, &|done| {
                 report(Stage::Assigning, done)
             })
-            .ok_or(Error::Cancelled)?
+            .ok_or(Error::Cancelled)?;
+            (cells, Vec::new())
         } else {
-            self.assign(&mut lattice, moved, parts.len(), report)?
+            self.assign(&mut lattice, moved, parts.len(), start, report)?
         };
         let area = &self.prepared.area_centroids;
         let misplaced = |region: usize, p: Coord<f64>| self.home.misplaced(region, p);
@@ -846,7 +860,8 @@ impl Context<'_> {
             let blocks_pinned = anchored(&|i| self.blocks.of[i]);
             groups::dock(&mut lattice, &self.blocks, area, gap, &blocks_pinned);
         }
-        Ok(self.scored(lattice, cells, moved_outline, moved.to_vec()))
+        let layout = self.scored(lattice, cells, moved_outline, moved.to_vec());
+        Ok((layout, prices))
     }
 
     /// `layout` refined (§6b) with `seed`, and scored again.
@@ -891,19 +906,22 @@ impl Context<'_> {
     }
 
     /// Each landmass's regions assigned among its own cells (method.md §6), the first `m` of
-    /// `lattice.cells`: per region, an index into them. The pinned regions take the first
+    /// `lattice.cells`: per region, an index into them, and per landmass the assignment's
+    /// prices, started from `start`'s where it has them. The pinned regions take the first
     /// cells, one each, in the order of `self.pins`.
     fn assign(
         &self,
         lattice: &mut Lattice,
         moved: &[Coord<f64>],
         parts: usize,
+        start: &[Option<Prices>],
         report: &dyn Fn(Stage, f64) -> bool,
-    ) -> Result<Vec<usize>, Error> {
+    ) -> Result<(Vec<usize>, Vec<Option<Prices>>), Error> {
         let m = moved.len();
         let part_of = &self.prepared.part_of;
         debug_assert!((0..m).all(|i| self.blocks.landmass[self.blocks.of[i]] == part_of[i]));
         let mut cells = vec![0; m];
+        let mut prices = Vec::with_capacity(parts);
         let mut free = vec![true; m];
         for (k, &(i, _)) in self.pins.iter().enumerate() {
             cells[i] = k;
@@ -921,15 +939,18 @@ impl Context<'_> {
                 .collect();
             // Each landmass's share of the assignment is its share of the regions.
             let share = regions.len() as f64 / m as f64;
-            let choices = assign::assign(&points, &centres, &|done| {
-                report(Stage::Assigning, done * share)
-            })
-            .ok_or(Error::Cancelled)?;
+            let part_start = start.get(part).and_then(Option::as_ref);
+            let (choices, part_prices) =
+                assign::assign_from(&points, &centres, part_start, &|done| {
+                    report(Stage::Assigning, done * share)
+                })
+                .ok_or(Error::Cancelled)?;
             for (&region, choice) in regions.iter().zip(choices) {
                 cells[region] = own[choice];
             }
+            prices.push(part_prices);
         }
-        Ok(cells)
+        Ok((cells, prices))
     }
 
     /// The refinement (§6b) of `cells` on `lattice`, towards where §8 will measure each region
