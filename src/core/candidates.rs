@@ -29,6 +29,7 @@ use rustc_hash::FxHashMap;
 use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 /// How far from the layer's centre, in mean region sizes (cells), a coordinate may lie. Real
 /// layers span a few thousand cells at most; beyond this the method's arithmetic (squared
@@ -188,72 +189,108 @@ fn generate_here(
         params,
     };
     let run_count = levels.len();
-    // Each Snake run's layouts start as soon as the run ends, so that a core that has finished
-    // its runs lays out instead of waiting for the last run (3 runs on 2 cores left one idle
-    // for a whole run). Which layout is made where changes nothing in it.
-    let runs = levels
-        .par_iter()
-        .enumerate()
-        .map(|(r, &md)| {
-            let network = if md == 0.0 {
-                base.clone()
+    let snake_run = |r: usize, md: f64| -> Result<(Network, SnakeRun), Error> {
+        let network = if md == 0.0 {
+            base.clone()
+        } else {
+            let centroids = noisy_centroids(&prepared, &base, md, seed(params.seed, 1, r));
+            network::build(&centroids, &prepared.rings, &prepared.adjacency)?
+        };
+        let neighbours = forces::neighbours(&network, &prepared.adjacency);
+        let started = AtomicUsize::new(0);
+        let run = snake::run(&network, &neighbours, params, &|| {
+            let step = started.fetch_add(1, Ordering::Relaxed) + 1;
+            let of_run = if run_count > 1 {
+                format!(" (run {} of {run_count})", r + 1)
             } else {
-                let centroids = noisy_centroids(&prepared, &base, md, seed(params.seed, 1, r));
-                network::build(&centroids, &prepared.rings, &prepared.adjacency)?
+                String::new()
             };
-            let neighbours = forces::neighbours(&network, &prepared.adjacency);
-            let started = AtomicUsize::new(0);
-            let run = snake::run(&network, &neighbours, params, &|| {
-                let step = started.fetch_add(1, Ordering::Relaxed) + 1;
-                let of_run = if run_count > 1 {
-                    format!(" (run {} of {run_count})", r + 1)
-                } else {
-                    String::new()
-                };
-                let message = format!("Snake step {step} of {}{of_run}", params.max_steps);
-                // Each step counts as it starts.
-                tracker.advance(1.0, &message)
-            })?;
-            // A run that stops early hands its steps never started to the progress count.
-            let unused = params.max_steps.saturating_sub(started.into_inner());
-            tracker.advance(unused as f64, "Snake");
-            let lay_out = |k: usize, shift: [f64; 2], start: &[Option<Prices>]| {
-                if tracker.cancelled() {
-                    return Err(Error::Cancelled);
+            let message = format!("Snake step {step} of {}{of_run}", params.max_steps);
+            // Each step counts as it starts.
+            tracker.advance(1.0, &message)
+        })?;
+        // A run that stops early hands its steps never started to the progress count.
+        let unused = params.max_steps.saturating_sub(started.into_inner());
+        tracker.advance(unused as f64, "Snake");
+        Ok((network, run))
+    };
+    let lay_out = |ran: &(Network, SnakeRun), k: usize, start: &[Option<Prices>]| {
+        if tracker.cancelled() {
+            return Err(Error::Cancelled);
+        }
+        let name = format!("layout {} of {}", k + 1, jobs.len());
+        let report = |stage: Stage, share: f64| {
+            tracker.advance(
+                share * weights.of(stage),
+                &format!("{name}: {}", stage.name()),
+            )
+        };
+        let laid = context.layout(&ran.0, &ran.1, jobs[k].1, start, &report)?;
+        if !report(Stage::Scoring, 1.0) {
+            return Err(Error::Cancelled);
+        }
+        Ok(laid)
+    };
+    // The Snake runs, then each run's layouts as it ends, all on the pool in the order they
+    // become ready: a core that has finished a run lays out while the other runs go on, and no
+    // run waits behind layouts (3 runs on 2 cores left a core idle for most of a run). A run's
+    // other shifts assign the same moved centroids to a lattice shifted by part of a cell, so
+    // they start from its first layout's prices (see assign::Prices). Where and when a layout
+    // is made changes nothing in it.
+    // Where each job leaves its result, for the collection in order after the scope.
+    type Slot<T> = Mutex<Option<Result<T, Error>>>;
+    let ran_slots: Vec<Slot<Arc<(Network, SnakeRun)>>> =
+        levels.iter().map(|_| Mutex::default()).collect();
+    let layout_slots: Vec<Slot<Layout>> = jobs.iter().map(|_| Mutex::default()).collect();
+    fn put<T>(slot: &Mutex<Option<T>>, value: T) {
+        *slot.lock().expect("no job panics while holding a slot") = Some(value);
+    }
+    fn taken<T>(slot: Mutex<Option<T>>) -> Option<T> {
+        slot.into_inner().ok().flatten()
+    }
+    let (snake_run, lay_out, jobs_ref) = (&snake_run, &lay_out, &jobs);
+    let (ran_slots_ref, layout_slots_ref) = (&ran_slots, &layout_slots);
+    rayon::scope_fifo(|scope| {
+        for (r, &md) in levels.iter().enumerate() {
+            scope.spawn_fifo(move |scope| {
+                let ran = snake_run(r, md).map(Arc::new);
+                if let Ok(ran) = &ran {
+                    let mut mine = (0..jobs_ref.len()).filter(|&k| jobs_ref[k].0 == r);
+                    if let Some(first) = mine.next() {
+                        let rest: Vec<usize> = mine.collect();
+                        let ran = Arc::clone(ran);
+                        scope.spawn_fifo(move |scope| {
+                            let laid = lay_out(&ran, first, &[]);
+                            let Ok((layout, prices)) = laid else {
+                                put(&layout_slots_ref[first], laid.map(|(layout, _)| layout));
+                                return;
+                            };
+                            put(&layout_slots_ref[first], Ok(layout));
+                            let prices = Arc::new(prices);
+                            for k in rest {
+                                let (ran, prices) = (Arc::clone(&ran), Arc::clone(&prices));
+                                scope.spawn_fifo(move |_| {
+                                    let laid = lay_out(&ran, k, &prices);
+                                    put(&layout_slots_ref[k], laid.map(|(layout, _)| layout));
+                                });
+                            }
+                        });
+                    }
                 }
-                let name = format!("layout {} of {}", k + 1, jobs.len());
-                let report = |stage: Stage, share: f64| {
-                    tracker.advance(
-                        share * weights.of(stage),
-                        &format!("{name}: {}", stage.name()),
-                    )
-                };
-                let laid = context.layout(&network, &run, shift, start, &report)?;
-                if !report(Stage::Scoring, 1.0) {
-                    return Err(Error::Cancelled);
-                }
-                Ok(laid)
-            };
-            let mine: Vec<(usize, [f64; 2])> = (jobs.iter().enumerate())
-                .filter(|(_, job)| job.0 == r)
-                .map(|(k, job)| (k, job.1))
-                .collect();
-            let Some((&(first, shift), rest)) = mine.split_first() else {
-                return Ok(((md, run), Vec::new()));
-            };
-            // The run's other shifts assign the same moved centroids to a lattice shifted by
-            // part of a cell: the first one's prices start them (see assign::Prices).
-            let (first, prices) = lay_out(first, shift, &[])?;
-            let rest = (rest.par_iter())
-                .map(|&(k, shift)| lay_out(k, shift, &prices).map(|(layout, _)| layout))
-                .collect::<Result<Vec<_>, Error>>()?;
-            let layouts: Vec<Layout> = std::iter::once(first).chain(rest).collect();
-            Ok(((md, run), layouts))
-        })
-        .collect::<Result<Vec<_>, Error>>()?;
-    // The jobs are in run-major order, so the runs' layouts in turn are in the jobs' order.
-    let (runs, layouts): (Vec<(f64, SnakeRun)>, Vec<Vec<Layout>>) = runs.into_iter().unzip();
-    let layouts: Vec<Layout> = layouts.into_iter().flatten().collect();
+                put(&ran_slots_ref[r], ran);
+            });
+        }
+    });
+    let mut runs = Vec::with_capacity(levels.len());
+    for (slot, &md) in ran_slots.into_iter().zip(&levels) {
+        let ran =
+            taken(slot).ok_or_else(|| Error::Internal("a Snake run was not made".into()))??;
+        runs.push((md, ran.1.clone()));
+    }
+    // A layout is missing only when one before it in its run failed, whose error comes first.
+    let layouts = (layout_slots.into_iter())
+        .map(|slot| taken(slot).ok_or_else(|| Error::Internal("a layout was not made".into()))?)
+        .collect::<Result<Vec<Layout>, Error>>()?;
 
     // The refinement moves every candidate about alike, so the best before it are the best
     // after (see REFINED_REGION_LAYOUTS): only those are refined, each with its own seed.
