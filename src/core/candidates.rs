@@ -215,21 +215,9 @@ fn generate_here(
         Ok((network, run))
     };
     let lay_out = |ran: &(Network, SnakeRun), k: usize, start: &[Option<Prices>]| {
-        if tracker.cancelled() {
-            return Err(Error::Cancelled);
-        }
-        let name = format!("layout {} of {}", k + 1, jobs.len());
-        let report = |stage: Stage, share: f64| {
-            tracker.advance(
-                share * weights.of(stage),
-                &format!("{name}: {}", stage.name()),
-            )
-        };
-        let laid = context.layout(&ran.0, &ran.1, jobs[k].1, start, &report)?;
-        if !report(Stage::Scoring, 1.0) {
-            return Err(Error::Cancelled);
-        }
-        Ok(laid)
+        tracker.layout_work(&weights, k, jobs.len(), |report| {
+            context.layout(&ran.0, &ran.1, jobs[k].1, start, report)
+        })
     };
     // The Snake runs, then each run's layouts as it ends, all on the pool in the order they
     // become ready: a core that has finished a run lays out while the other runs go on, and no
@@ -308,21 +296,9 @@ fn generate_here(
         let refined = chosen_layouts
             .into_par_iter()
             .map(|(k, layout)| {
-                if tracker.cancelled() {
-                    return Err(Error::Cancelled);
-                }
-                let name = format!("layout {} of {}", k + 1, jobs.len());
-                let report = |stage: Stage, share: f64| {
-                    tracker.advance(
-                        share * weights.of(stage),
-                        &format!("{name}: {}", stage.name()),
-                    )
-                };
-                let layout = context.refined(layout, seed(params.seed, 2, k), &report)?;
-                if !report(Stage::Scoring, 1.0) {
-                    return Err(Error::Cancelled);
-                }
-                Ok(layout)
+                tracker.layout_work(&weights, k, jobs.len(), |report| {
+                    context.refined(layout, seed(params.seed, 2, k), report)
+                })
             })
             .collect::<Result<Vec<_>, Error>>()?;
         (refined, chosen)
@@ -628,6 +604,32 @@ impl<'a> Tracker<'a> {
             return false;
         }
         true
+    }
+
+    /// Runs `work` on layout `k` of `count` with a report that names the layout and its stage,
+    /// then counts the layout's scoring; [`Error::Cancelled`] once the run is cancelled.
+    fn layout_work<T>(
+        &self,
+        weights: &StageWeights,
+        k: usize,
+        count: usize,
+        work: impl FnOnce(&dyn Fn(Stage, f64) -> bool) -> Result<T, Error>,
+    ) -> Result<T, Error> {
+        if self.cancelled() {
+            return Err(Error::Cancelled);
+        }
+        let name = format!("layout {} of {count}", k + 1);
+        let report = |stage: Stage, share: f64| {
+            self.advance(
+                share * weights.of(stage),
+                &format!("{name}: {}", stage.name()),
+            )
+        };
+        let done = work(&report)?;
+        if !report(Stage::Scoring, 1.0) {
+            return Err(Error::Cancelled);
+        }
+        Ok(done)
     }
 
     fn cancelled(&self) -> bool {
