@@ -223,9 +223,9 @@ fn generate_here(
     // become ready: a core that has finished a run lays out while the other runs go on, and no
     // run waits behind layouts (3 runs on 2 cores left a core idle for most of a run). A run's
     // other shifts assign the same moved centroids to a lattice shifted by part of a cell, so
-    // they start from its first layout's prices (see assign::Prices). Where and when a layout
-    // is made changes nothing in it.
-    // Where each job leaves its result, for the collection in order after the scope.
+    // they start from its first layout's prices (see assign::Prices). Each job leaves its
+    // result in its own slot, collected in order after the scope: where and when a layout is
+    // made changes nothing in it.
     type Slot<T> = Mutex<Option<Result<T, Error>>>;
     let ran_slots: Vec<Slot<Arc<(Network, SnakeRun)>>> =
         levels.iter().map(|_| Mutex::default()).collect();
@@ -236,34 +236,39 @@ fn generate_here(
     fn taken<T>(slot: Mutex<Option<T>>) -> Option<T> {
         slot.into_inner().ok().flatten()
     }
-    let (snake_run, lay_out, jobs_ref) = (&snake_run, &lay_out, &jobs);
+    // Run `r`'s first layout, made from scratch; the run's other layouts and the prices that
+    // start them, unless it failed.
+    let first_layout = |ran: &(Network, SnakeRun), r: usize| {
+        let mut mine = (0..jobs.len()).filter(|&k| jobs[k].0 == r);
+        let first = mine.next()?;
+        let laid = lay_out(ran, first, &[]);
+        let Ok((layout, prices)) = laid else {
+            put(&layout_slots[first], laid.map(|(layout, _)| layout));
+            return None;
+        };
+        put(&layout_slots[first], Ok(layout));
+        Some((mine.collect::<Vec<usize>>(), Arc::new(prices)))
+    };
+    let (snake_run, lay_out, first_layout) = (&snake_run, &lay_out, &first_layout);
     let (ran_slots_ref, layout_slots_ref) = (&ran_slots, &layout_slots);
     rayon::scope_fifo(|scope| {
         for (r, &md) in levels.iter().enumerate() {
             scope.spawn_fifo(move |scope| {
                 let ran = snake_run(r, md).map(Arc::new);
                 if let Ok(ran) = &ran {
-                    let mut mine = (0..jobs_ref.len()).filter(|&k| jobs_ref[k].0 == r);
-                    if let Some(first) = mine.next() {
-                        let rest: Vec<usize> = mine.collect();
-                        let ran = Arc::clone(ran);
-                        scope.spawn_fifo(move |scope| {
-                            let laid = lay_out(&ran, first, &[]);
-                            let Ok((layout, prices)) = laid else {
-                                put(&layout_slots_ref[first], laid.map(|(layout, _)| layout));
-                                return;
-                            };
-                            put(&layout_slots_ref[first], Ok(layout));
-                            let prices = Arc::new(prices);
-                            for k in rest {
-                                let (ran, prices) = (Arc::clone(&ran), Arc::clone(&prices));
-                                scope.spawn_fifo(move |_| {
-                                    let laid = lay_out(&ran, k, &prices);
-                                    put(&layout_slots_ref[k], laid.map(|(layout, _)| layout));
-                                });
-                            }
-                        });
-                    }
+                    let ran = Arc::clone(ran);
+                    scope.spawn_fifo(move |scope| {
+                        let Some((rest, prices)) = first_layout(&ran, r) else {
+                            return;
+                        };
+                        for k in rest {
+                            let (ran, prices) = (Arc::clone(&ran), Arc::clone(&prices));
+                            scope.spawn_fifo(move |_| {
+                                let laid = lay_out(&ran, k, &prices);
+                                put(&layout_slots_ref[k], laid.map(|(layout, _)| layout));
+                            });
+                        }
+                    });
                 }
                 put(&ran_slots_ref[r], ran);
             });

@@ -452,11 +452,9 @@ impl Terms {
                 .collect(),
             pairs: (0..board.at.len())
                 .flat_map(|region| {
-                    (problem.neighbours(region).iter())
-                        .map(move |&(other, direction)| {
-                            problem.pair(direction, cell(region), cell(other))
-                        })
-                        .collect::<Vec<_>>()
+                    (problem.neighbours(region).iter()).map(move |&(other, direction)| {
+                        problem.pair(direction, cell(region), cell(other))
+                    })
                 })
                 .collect(),
             staged: Staged::default(),
