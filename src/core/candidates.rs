@@ -4,6 +4,7 @@
 //! regions or their ids, because everything works on the regions in a geometric order.
 
 use super::assign::Prices;
+use super::derived_seed;
 use super::frame::Frame;
 use super::grid::{self, Lattice, LatticeCell};
 use super::groups;
@@ -193,7 +194,7 @@ fn generate_here(
         let network = if md == 0.0 {
             base.clone()
         } else {
-            let centroids = noisy_centroids(&prepared, &base, md, seed(params.seed, 1, r));
+            let centroids = noisy_centroids(&prepared, &base, md, derived_seed(params.seed, 1, r));
             network::build(&centroids, &prepared.rings, &prepared.adjacency)?
         };
         let neighbours = forces::neighbours(&network, &prepared.adjacency);
@@ -302,7 +303,7 @@ fn generate_here(
             .into_par_iter()
             .map(|(k, layout)| {
                 tracker.layout_work(&weights, k, jobs.len(), |report| {
-                    context.refined(layout, seed(params.seed, 2, k), report)
+                    context.refined(layout, derived_seed(params.seed, 2, k), report)
                 })
             })
             .collect::<Result<Vec<_>, Error>>()?;
@@ -529,13 +530,6 @@ fn has_area(geometry: &MultiPolygon<f64>) -> bool {
     geometry.unsigned_area().partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater)
 }
 
-/// A seed for the `k`-th draw of purpose `purpose`, so every random choice is reproducible and
-/// independent of the thread that makes it.
-fn seed(base: u64, purpose: u64, k: usize) -> u64 {
-    base ^ purpose.wrapping_mul(0xD1B5_4A32_D192_ED03)
-        ^ (k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-}
-
 /// Strategy 1 of §7: Gaussian noise on the centroids, σ_i = md × the mean distance from centroid
 /// i to its neighbours, redrawn while it falls outside the outline.
 fn noisy_centroids(prepared: &Prepared, base: &Network, md: f64, seed: u64) -> Vec<Coord<f64>> {
@@ -618,7 +612,7 @@ impl<'a> Tracker<'a> {
         weights: &StageWeights,
         k: usize,
         count: usize,
-        work: impl FnOnce(&dyn Fn(Stage, f64) -> bool) -> Result<T, Error>,
+        work: impl FnOnce(&(dyn Fn(Stage, f64) -> bool + Sync)) -> Result<T, Error>,
     ) -> Result<T, Error> {
         if self.cancelled() {
             return Err(Error::Cancelled);
@@ -807,7 +801,7 @@ impl Context<'_> {
         run: &SnakeRun,
         shift: [f64; 2],
         start: &[Option<Prices>],
-        report: &dyn Fn(Stage, f64) -> bool,
+        report: &(dyn Fn(Stage, f64) -> bool + Sync),
     ) -> Result<(Layout, Vec<Option<Prices>>), Error> {
         let m = network.centroids;
         let mut moved: Cow<[Coord<f64>]> = Cow::Borrowed(&run.positions[..m]);
@@ -913,7 +907,7 @@ impl Context<'_> {
         &self,
         layout: Layout,
         seed: u64,
-        report: &dyn Fn(Stage, f64) -> bool,
+        report: &(dyn Fn(Stage, f64) -> bool + Sync),
     ) -> Result<Layout, Error> {
         let cells = self.refine(&layout.lattice, &layout.cells, seed, report)?;
         Ok(self.scored(layout.lattice, cells, layout.moved_outline, layout.moved))
@@ -959,7 +953,7 @@ impl Context<'_> {
         moved: &[Coord<f64>],
         parts: usize,
         start: &[Option<Prices>],
-        report: &dyn Fn(Stage, f64) -> bool,
+        report: &(dyn Fn(Stage, f64) -> bool + Sync),
     ) -> Result<(Vec<usize>, Vec<Option<Prices>>), Error> {
         let m = moved.len();
         let part_of = &self.prepared.part_of;
@@ -1005,7 +999,7 @@ impl Context<'_> {
         lattice: &Lattice,
         cells: &[usize],
         seed: u64,
-        report: &dyn Fn(Stage, f64) -> bool,
+        report: &(dyn Fn(Stage, f64) -> bool + Sync),
     ) -> Result<Vec<usize>, Error> {
         let area = &self.prepared.area_centroids;
         let assigned: Vec<Coord<f64>> = (cells.iter())

@@ -102,6 +102,13 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
+/// A seed for the `k`-th draw of purpose `purpose`, so every random choice is reproducible and
+/// independent of the thread that makes it.
+fn derived_seed(base: u64, purpose: u64, k: usize) -> u64 {
+    base ^ purpose.wrapping_mul(0xD1B5_4A32_D192_ED03)
+        ^ (k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+}
+
 /// Progress reporting: called with the fraction done (0..=1) and a short message; returning
 /// `false` cancels the run, which then ends with [`Error::Cancelled`]. Called from worker
 /// threads, hence `Sync`.
@@ -109,7 +116,7 @@ pub type Progress<'a> = &'a (dyn Fn(f64, &str) -> bool + Sync);
 
 /// What a long step inside one layout (the assignment, the refinement) reports as it goes: the
 /// share of its work done since the last call; returning `false` stops the step.
-type Tick<'a> = &'a dyn Fn(f64) -> bool;
+type Tick<'a> = &'a (dyn Fn(f64) -> bool + Sync);
 
 /// Why the Snake stopped (method.md §5).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

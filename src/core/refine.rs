@@ -14,11 +14,15 @@
 //! regions involved, and for a move on the positions around the two cells, O(degree). The best
 //! state seen is recovered at the end by undoing the moves accepted since it, so it is never
 //! copied.
+//!
+//! From 6,000 regions on, one layout is refined (see `Params::refined_count`), which would leave
+//! all cores but one idle: the board is then annealed in stripes at once ([`Stripes`]), phase
+//! after phase, each stripe keeping its best state.
 
 use super::grid::{Lattice, LatticeCell};
 use super::tiling::{Position, Tiling};
 use super::Params;
-use super::Tick;
+use super::{derived_seed, Tick};
 use geo::Coord;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -41,7 +45,7 @@ pub struct Layout<'a> {
     /// Whether region `i` at a position would lie nearer another landmass than its own; `None`
     /// when no region can (fewer than two landmasses count), which spares the refinement a
     /// cache lookup per proposal (a quarter of its time on 10,000 regions).
-    pub misplaced: Option<&'a dyn Fn(usize, Position) -> bool>,
+    pub misplaced: Option<&'a (dyn Fn(usize, Position) -> bool + Sync)>,
 }
 
 /// Improves `cells` (per region, an index into `layout.lattice.cells`) and returns the new
@@ -68,8 +72,14 @@ pub fn refine(
         // No region to draw a proposal for.
         return Some(Vec::new());
     }
-    let problem = Problem::new(layout, params);
-    let (best, _) = anneal(&problem, cells, params, seed, tick)?;
+    let links = Links::of(layout);
+    let problem = Problem::new(layout, params, &links);
+    let stripes = stripe_count(cells.len());
+    let best = if stripes == 1 {
+        anneal(&problem, cells, params, seed, tick)?.0
+    } else {
+        anneal_in_stripes(layout, &links, cells, params, seed, stripes, tick)?
+    };
     // The search tracks its energy as a sum of many deltas; comparing exact totals makes the
     // promise never to return a worse state hold even to the last bit.
     let defects = |at: &[usize]| {
@@ -127,7 +137,8 @@ fn moves(params: &Params, regions: usize) -> usize {
     params.refine_moves_per_region.saturating_mul(regions)
 }
 
-/// Runs the annealing from `cells` and returns the best state seen and its (tracked) energy.
+/// Runs the annealing from `cells` over the whole board and returns the best state seen and its
+/// (tracked) energy.
 fn anneal(
     problem: &Problem,
     cells: &[usize],
@@ -135,54 +146,261 @@ fn anneal(
     seed: u64,
     tick: Tick,
 ) -> Option<(Vec<usize>, f64)> {
-    let regions = cells.len();
     let lattice = problem.layout.lattice;
-    let mut board = Board::new(lattice, cells, lattice.cells.len());
-    let may_move = regions >= params.refine_swap_only_below;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut energy = problem.energy(cells);
-    let mut best = energy;
-    // Inverses of the moves accepted since the best state, to walk back to it at the end.
-    let mut since_best = Vec::new();
-    let moves = moves(params, regions);
-    // Reused by every proposal: a move allocates nothing.
-    let mut scope = Scope::default();
-    let mut terms = Terms::of(problem, &board);
-    for step in 0..moves {
-        if step % TICK_MOVES == TICK_MOVES - 1 && !tick(TICK_MOVES as f64 / moves as f64) {
+    let board = Board::new(lattice, cells, lattice.cells.len());
+    let terms = Terms::of(problem, &board);
+    let regions: Vec<usize> = (0..cells.len()).collect();
+    let search = Search {
+        regions: &regions,
+        owner: None,
+        moves: moves(params, cells.len()),
+        schedule: (0.0, 1.0),
+        may_move: cells.len() >= params.refine_swap_only_below,
+        seed,
+        temperature: params.refine_temperature,
+    };
+    let energy = problem.energy(cells);
+    search.run(problem, board, terms, energy, tick)
+}
+
+/// One annealing run: the regions it draws from, the stripe it is confined to, its moves and
+/// its share of the temperature schedule.
+struct Search<'s> {
+    regions: &'s [usize],
+    /// The phase's stripes and the one this run owns; `None`: the whole board.
+    owner: Option<(&'s Stripes, &'s [Option<usize>], usize)>,
+    moves: usize,
+    /// The share of the schedule done before this run, and the share it covers.
+    schedule: (f64, f64),
+    may_move: bool,
+    seed: u64,
+    /// The temperature at the start of the whole schedule.
+    temperature: f64,
+}
+
+impl Search<'_> {
+    /// Anneals `board` (whose terms `terms` holds and whose energy is `energy`) and returns the
+    /// best state seen and its (tracked) energy.
+    fn run(
+        &self,
+        problem: &Problem,
+        mut board: Board,
+        mut terms: Terms,
+        mut energy: f64,
+        tick: Tick,
+    ) -> Option<(Vec<usize>, f64)> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let mut best = energy;
+        // Inverses of the moves accepted since the best state, to walk back to it at the end.
+        let mut since_best = Vec::new();
+        let moves = self.moves;
+        let (done_before, span) = self.schedule;
+        // Reused by every proposal: a move allocates nothing.
+        let mut scope = Scope::default();
+        for step in 0..moves {
+            if step % TICK_MOVES == TICK_MOVES - 1 && !tick(TICK_MOVES as f64 / moves as f64) {
+                return None;
+            }
+            let temperature =
+                self.temperature * (1.0 - (done_before + step as f64 / moves as f64 * span));
+            let region = self.regions[rng.random_range(0..self.regions.len())];
+            let Some(proposal) = board.propose(problem, &mut rng, region, self.may_move) else {
+                continue;
+            };
+            if !self.owns(proposal, &board) {
+                continue;
+            }
+            problem.fill_scope(proposal, &board, &mut scope);
+            let before = problem.kept_energy(&scope, &board, &terms);
+            let undo = board.apply(proposal);
+            let delta = problem.local_energy(&scope, &board, &mut terms.staged) - before;
+            let accept = delta <= 0.0
+                || (temperature > 0.0 && rng.random::<f64>() < (-delta / temperature).exp());
+            if !accept {
+                board.apply(undo);
+                continue;
+            }
+            terms.commit(problem);
+            energy += delta;
+            since_best.push(undo);
+            // Gains below rounding noise do not make a new best: they would only be drift.
+            if energy < best - 1e-9 {
+                best = energy;
+                since_best.clear();
+            }
+        }
+        // The moves after the last tick complete the share.
+        if !tick((moves % TICK_MOVES) as f64 / moves.max(1) as f64) {
             return None;
         }
-        let temperature = params.refine_temperature * (1.0 - step as f64 / moves as f64);
-        let Some(proposal) = board.propose(problem, &mut rng, may_move) else {
-            continue;
-        };
-        problem.fill_scope(proposal, &board, &mut scope);
-        let before = problem.kept_energy(&scope, &board, &terms);
-        let undo = board.apply(proposal);
-        let delta = problem.local_energy(&scope, &board, &mut terms.staged) - before;
-        let accept = delta <= 0.0
-            || (temperature > 0.0 && rng.random::<f64>() < (-delta / temperature).exp());
-        if !accept {
+        for undo in since_best.into_iter().rev() {
             board.apply(undo);
-            continue;
         }
-        terms.commit(problem);
-        energy += delta;
-        since_best.push(undo);
-        // Gains below rounding noise do not make a new best: they would only be drift.
-        if energy < best - 1e-9 {
-            best = energy;
-            since_best.clear();
+        Some((board.at, best))
+    }
+
+    /// Whether `proposal` stays within this run's stripe: it moves only regions the stripe
+    /// owns, onto positions it owns.
+    fn owns(&self, proposal: Move, board: &Board) -> bool {
+        let Some((stripes, owner, stripe)) = self.owner else {
+            return true;
+        };
+        match proposal {
+            Move::Swap(a, b) => owner[a] == Some(stripe) && owner[b] == Some(stripe),
+            Move::Chain(chain) => chain.cells().iter().enumerate().all(|(k, &index)| {
+                let cell = board.lattice.cells[index];
+                let last = k + 1 == chain.len;
+                stripes.owner((cell.col, cell.row)) == Some(stripe)
+                    && (last
+                        || board
+                            .region_on(index)
+                            .is_some_and(|r| owner[r] == Some(stripe)))
+            }),
         }
     }
-    // The moves after the last tick complete the share.
-    if !tick((moves % TICK_MOVES) as f64 / moves.max(1) as f64) {
-        return None;
+}
+
+/// Regions per stripe of a refinement that anneals its stripes at once: with fewer than two
+/// stripes' worth, the board is annealed whole. From 6,000 regions on, one layout is refined
+/// (see `Params::refined_count`), and stripes let it use more than one core.
+const STRIPE_REGIONS: usize = 3_000;
+
+/// The most stripes, however many the regions: each cut freezes a band of regions for a phase.
+const MOST_STRIPES: usize = 8;
+
+/// The phases of a striped refinement: the stripes run across the columns, then across the
+/// rows, then both again, shifted by half a stripe, so that every frozen band is free in
+/// another phase.
+const PHASES: usize = 8;
+
+/// How many stripes the refinement of `regions` regions anneals at once. It follows the regions
+/// only, so that the result does not depend on the number of threads.
+fn stripe_count(regions: usize) -> usize {
+    (regions / STRIPE_REGIONS).clamp(1, MOST_STRIPES)
+}
+
+/// A phase's split of the lattice into parallel stripes of about equal regions, with a frozen
+/// band of two columns (or rows) at each cut. Everything a move reads lies within two
+/// positions of the positions it changes, so stripes three apart never see each other's moves:
+/// their energy changes add up, and their pieces and holes are kept as one board's are.
+struct Stripes {
+    across_rows: bool,
+    /// The first position of each stripe but the first; the two before it are the band.
+    cuts: Vec<i32>,
+}
+
+impl Stripes {
+    /// The stripes of `phase` for the regions at `positions`.
+    fn of(phase: usize, count: usize, positions: &[Position]) -> Stripes {
+        let across_rows = phase % 2 == 1;
+        let shift = if (phase / 2) % 2 == 1 { 0.5 } else { 0.0 };
+        let mut along: Vec<i32> = (positions.iter())
+            .map(|p| if across_rows { p.1 } else { p.0 })
+            .collect();
+        along.sort_unstable();
+        let mut cuts: Vec<i32> = (1..=count)
+            .map(|j| (j as f64 - shift) / count as f64)
+            .filter(|&q| q > 0.0 && q < 1.0)
+            .map(|q| along[(q * along.len() as f64) as usize])
+            .collect();
+        cuts.dedup();
+        Stripes { across_rows, cuts }
     }
-    for undo in since_best.into_iter().rev() {
-        board.apply(undo);
+
+    fn count(&self) -> usize {
+        self.cuts.len() + 1
     }
-    Some((board.at, best))
+
+    /// The stripe that owns position `p`; `None` in a band.
+    fn owner(&self, p: Position) -> Option<usize> {
+        let x = if self.across_rows { p.1 } else { p.0 };
+        let stripe = self.cuts.partition_point(|&cut| cut <= x);
+        let in_band = self.cuts.get(stripe).is_some_and(|&cut| x >= cut - 2);
+        (!in_band).then_some(stripe)
+    }
+}
+
+/// The refinement of `cells` in [`PHASES`] phases, each annealing `stripes` stripes of the
+/// board at once (their regions only, in their share of the schedule, each from its own seed)
+/// and keeping each stripe's best state. A region is frozen for a phase when its cell lies in a
+/// band or a neighbour's cell lies in another stripe, so that no pair term is shared. The result
+/// depends on the seed and the input, not on the threads.
+fn anneal_in_stripes(
+    layout: &Layout,
+    links: &Links,
+    cells: &[usize],
+    params: &Params,
+    seed: u64,
+    stripes: usize,
+    tick: Tick,
+) -> Option<Vec<usize>> {
+    use rayon::prelude::*;
+    let lattice = layout.lattice;
+    let n = cells.len();
+    let position = |index: usize| (lattice.cells[index].col, lattice.cells[index].row);
+    let mut at = cells.to_vec();
+    let per_phase = moves(params, n) / PHASES;
+    for phase in 0..PHASES {
+        let positions: Vec<Position> = at.iter().map(|&k| position(k)).collect();
+        let split = Stripes::of(phase, stripes, &positions);
+        let problem = Problem::new(layout, params, links);
+        let owner: Vec<Option<usize>> = (0..n)
+            .map(|region| {
+                let stripe = split.owner(positions[region])?;
+                (problem.neighbours(region).iter())
+                    .all(|&(other, _)| split.owner(positions[other]).is_none_or(|s| s == stripe))
+                    .then_some(stripe)
+            })
+            .collect();
+        let mut owned = vec![Vec::new(); split.count()];
+        for (region, stripe) in owner.iter().enumerate() {
+            if let Some(stripe) = stripe {
+                owned[*stripe].push(region);
+            }
+        }
+        let owned_regions: usize = owned.iter().map(Vec::len).sum();
+        let budgets: Vec<usize> = (owned.iter())
+            .map(|r| per_phase * r.len() / owned_regions.max(1))
+            .collect();
+        let total: usize = budgets.iter().sum();
+        let board = Board::new(lattice, &at, lattice.cells.len());
+        let terms = Terms::of(&problem, &board);
+        let schedule = (phase as f64 / PHASES as f64, 1.0 / PHASES as f64);
+        let results = (0..split.count())
+            .into_par_iter()
+            .map(|stripe| {
+                let (regions, moves) = (&owned[stripe], budgets[stripe]);
+                if regions.is_empty() || moves == 0 {
+                    return Some(None);
+                }
+                let search = Search {
+                    regions,
+                    owner: Some((&split, &owner, stripe)),
+                    moves,
+                    schedule,
+                    may_move: n >= params.refine_swap_only_below,
+                    seed: derived_seed(seed, phase as u64 + 1, stripe),
+                    temperature: params.refine_temperature,
+                };
+                let weight = moves as f64 / total as f64 / PHASES as f64;
+                let problem = Problem::new(layout, params, links);
+                let (best, _) =
+                    search.run(&problem, board.clone(), terms.clone(), 0.0, &|share| {
+                        tick(share * weight)
+                    })?;
+                Some(Some(best))
+            })
+            .collect::<Option<Vec<Option<Vec<usize>>>>>()?;
+        for (region, stripe) in owner.iter().enumerate() {
+            if let Some(best) = stripe.and_then(|s| results[s].as_ref()) {
+                at[region] = best[region];
+            }
+        }
+        if total == 0 && !tick(1.0 / PHASES as f64) {
+            return None;
+        }
+    }
+    Some(at)
 }
 
 /// The energy of method.md §6b with its weights, and each region's neighbours.
@@ -237,25 +455,18 @@ impl PairWeights {
     }
 }
 
-struct Problem<'a> {
-    layout: &'a Layout<'a>,
-    pairs: PairWeights,
-    /// `refine_w_location` per S'², so that distances count in cells.
-    w_location: f64,
-    w_landmass: f64,
-    w_notch: f64,
-    /// Each region's adjacent regions and the original directions towards them, region after
-    /// region: those of region `i` are `links[first[i]..first[i + 1]]`.
+/// Each region's adjacent regions and the original directions towards them, region after
+/// region: those of region `i` are `links[first[i]..first[i + 1]]`. Made once per refinement
+/// and shared by its searches.
+struct Links {
     links: Vec<(usize, Coord<f64>)>,
     first: Vec<usize>,
     /// Per link, the index of the same pair seen from the other region.
     reverse: Vec<usize>,
-    /// [`Layout::misplaced`], asked once per region and position.
-    misplaced: RefCell<FxHashMap<(usize, Position), bool>>,
 }
 
-impl<'a> Problem<'a> {
-    fn new(layout: &'a Layout<'a>, params: &Params) -> Self {
+impl Links {
+    fn of(layout: &Layout) -> Links {
         let regions = layout.centroids.len();
         let pairs = || layout.adjacency.iter().filter(|(i, j)| i != j);
         let mut first = vec![0; regions + 1];
@@ -279,15 +490,39 @@ impl<'a> Problem<'a> {
             next[i] += 1;
             next[j] += 1;
         }
+        Links {
+            links,
+            first,
+            reverse,
+        }
+    }
+}
+
+struct Problem<'a> {
+    layout: &'a Layout<'a>,
+    pairs: PairWeights,
+    /// `refine_w_location` per S'², so that distances count in cells.
+    w_location: f64,
+    w_landmass: f64,
+    w_notch: f64,
+    links: &'a [(usize, Coord<f64>)],
+    first: &'a [usize],
+    reverse: &'a [usize],
+    /// [`Layout::misplaced`], asked once per region and position.
+    misplaced: RefCell<FxHashMap<(usize, Position), bool>>,
+}
+
+impl<'a> Problem<'a> {
+    fn new(layout: &'a Layout<'a>, params: &Params, links: &'a Links) -> Self {
         Problem {
             layout,
             pairs: PairWeights::of(params),
             w_location: params.refine_w_location / layout.lattice.cell_size.powi(2),
             w_landmass: params.refine_w_landmass,
             w_notch: params.refine_w_notch,
-            links,
-            first,
-            reverse,
+            links: &links.links,
+            first: &links.first,
+            reverse: &links.reverse,
             misplaced: RefCell::default(),
         }
     }
@@ -427,6 +662,7 @@ impl<'a> Problem<'a> {
 /// Every placement and pair term of the current assignment, so that a proposal's energy before
 /// it is read, not computed again: most proposals are turned down, and computing both sides
 /// was most of a refinement.
+#[derive(Clone)]
 struct Terms {
     /// Per region.
     placements: Vec<f64>,
@@ -437,7 +673,7 @@ struct Terms {
 }
 
 /// The terms [`Problem::local_energy`] computed: (region, placement) and (link, pair).
-#[derive(Default)]
+#[derive(Clone, Default)]
 struct Staged {
     placements: Vec<(usize, f64)>,
     pairs: Vec<(usize, f64)>,
@@ -547,6 +783,7 @@ struct Slot {
 /// positions of the pool and of the assigned cells, so its size follows the regions and not the
 /// empty space between them (two clusters far apart would otherwise need one slot per cell of
 /// their bounding box).
+#[derive(Clone)]
 struct Board<'a> {
     lattice: &'a Lattice,
     /// Per region, its index into `lattice.cells`.
@@ -624,9 +861,15 @@ impl<'a> Board<'a> {
         self.slot((cell.col, cell.row))?.region
     }
 
-    /// Draws a proposal; `None` when the drawn position offers nothing (see the module notes).
-    fn propose(&self, problem: &Problem, rng: &mut ChaCha8Rng, may_move: bool) -> Option<Move> {
-        let region = rng.random_range(0..self.at.len());
+    /// Draws a proposal for `region`; `None` when the drawn position offers nothing (see the
+    /// module notes).
+    fn propose(
+        &self,
+        problem: &Problem,
+        rng: &mut ChaCha8Rng,
+        region: usize,
+        may_move: bool,
+    ) -> Option<Move> {
         let here = self.lattice.cells[self.at[region]];
         if may_move && rng.random_bool(PUSHES) {
             let sides = self.lattice.tiling.sides().len();
@@ -842,7 +1085,7 @@ mod tests {
     }
 
     fn energy(layout: &Layout, cells: &[usize]) -> f64 {
-        Problem::new(layout, &Params::default()).energy(cells)
+        Problem::new(layout, &Params::default(), &Links::of(layout)).energy(cells)
     }
 
     /// Pieces and holes of the layout `at`, as the metrics count them.
@@ -882,7 +1125,8 @@ mod tests {
     fn pair_energy_counts_gap_angle_and_misdirection() {
         let map = Map::new(2, 2, 0);
         let layout = map.layout();
-        let problem = Problem::new(&layout, &Params::default());
+        let links = Links::of(&layout);
+        let problem = Problem::new(&layout, &Params::default(), &links);
         let east = Coord { x: 1.0, y: 0.0 };
         let at = |col, row| LatticeCell {
             col,
@@ -906,14 +1150,16 @@ mod tests {
     fn incremental_deltas_match_full_recomputation() {
         let (map, cells) = scrambled(6, 5, 3);
         let layout = map.layout();
-        let problem = Problem::new(&layout, &Params::default());
+        let links = Links::of(&layout);
+        let problem = Problem::new(&layout, &Params::default(), &links);
         let pool = map.lattice.cells.len();
         let mut board = Board::new(&map.lattice, &cells, pool);
         let mut rng = ChaCha8Rng::seed_from_u64(9);
         let (mut swaps, mut adjacent_swaps, mut shifts) = (0, 0, 0);
         let mut terms = Terms::of(&problem, &board);
         for _ in 0..3_000 {
-            let Some(proposal) = board.propose(&problem, &mut rng, true) else {
+            let region = rng.random_range(0..cells.len());
+            let Some(proposal) = board.propose(&problem, &mut rng, region, true) else {
                 continue;
             };
             let total_before = problem.energy(&board.at);
@@ -1015,7 +1261,8 @@ mod tests {
         let (map, cells) = scrambled(8, 5, 4);
         let layout = map.layout();
         let params = Params::default();
-        let problem = Problem::new(&layout, &params);
+        let links = Links::of(&layout);
+        let problem = Problem::new(&layout, &params, &links);
         let (best, tracked) = anneal(&problem, &cells, &params, 5, &|_| true).unwrap();
         assert!((problem.energy(&best) - tracked).abs() < 1e-6);
     }
@@ -1029,13 +1276,13 @@ mod tests {
             refine_moves_per_region: 100,
             ..Params::default()
         };
-        let shares = std::cell::RefCell::new(Vec::new());
+        let shares = std::sync::Mutex::new(Vec::new());
         refine(&layout, &cells, &params, 3, &|share| {
-            shares.borrow_mut().push(share);
+            shares.lock().unwrap().push(share);
             true
         })
         .unwrap();
-        let shares = shares.into_inner();
+        let shares = shares.into_inner().unwrap();
         assert_eq!(shares.len(), 3);
         assert!(
             (shares.iter().sum::<f64>() - 1.0).abs() < 1e-12,
@@ -1082,6 +1329,106 @@ mod tests {
         assert_eq!(
             refine(&map.layout(), &scrambled, &still, 1, &|_| true).unwrap(),
             scrambled
+        );
+    }
+
+    /// The block in reading order with `swaps` random swaps of cells at most 2 apart: every
+    /// region near its place, as after the assignment.
+    fn perturbed(cols: i32, rows: i32, seed: u64, swaps: usize) -> (Map, Vec<usize>) {
+        let map = Map::new(cols, rows, 2);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut cells: Vec<usize> = (0..map.centroids.len()).collect();
+        let index = |c: i32, r: i32| (r * cols + c) as usize;
+        for _ in 0..swaps {
+            let (c, r) = (rng.random_range(0..cols), rng.random_range(0..rows));
+            let (dc, dr) = (rng.random_range(-2..=2), rng.random_range(-2..=2));
+            let (c2, r2) = ((c + dc).clamp(0, cols - 1), (r + dr).clamp(0, rows - 1));
+            cells.swap(index(c, r), index(c2, r2));
+        }
+        (map, cells)
+    }
+
+    #[test]
+    fn stripes_are_three_apart_with_bands_between() {
+        let positions: Vec<Position> = (0..40).flat_map(|c| (0..5).map(move |r| (c, r))).collect();
+        for phase in 0..PHASES {
+            let stripes = Stripes::of(phase, 3, &positions);
+            assert!((3..=4).contains(&stripes.count()), "phase {phase}");
+            let owned: Vec<(Position, usize)> = (positions.iter())
+                .filter_map(|&p| stripes.owner(p).map(|s| (p, s)))
+                .collect();
+            // Two frozen columns (or rows) at each cut: all the rest is owned.
+            let band = 2 * (stripes.count() - 1) * if phase % 2 == 0 { 5 } else { 40 };
+            let banded = positions.len() - owned.len();
+            assert!(banded <= band && banded > 0, "phase {phase}: {banded}");
+            for &(p, s) in &owned {
+                for &(q, t) in &owned {
+                    if s != t {
+                        assert!(Tiling::Square.distance(p, q) >= 3, "{p:?} {q:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn striped_refinement_keeps_the_promises_of_a_whole_one() {
+        let (map, cells) = perturbed(60, 40, 8, 1_500);
+        let layout = map.layout();
+        let params = Params::default();
+        let links = Links::of(&layout);
+        let pool = map.lattice.cells.len();
+        let striped = anneal_in_stripes(&layout, &links, &cells, &params, 3, 4, &|_| true).unwrap();
+        let whole = refine(&layout, &cells, &params, 3, &|_| true).unwrap();
+        assert!(distinct(&striped) && striped.iter().all(|&c| c < pool));
+        let (before, after) = (shape(&map.lattice, &cells), shape(&map.lattice, &striped));
+        assert!(after.0 <= before.0 && after.1 <= before.1);
+        let (start, stripes, one) = (
+            energy(&layout, &cells),
+            energy(&layout, &striped),
+            energy(&layout, &whole),
+        );
+        // Frozen bands cost the stripes little: they end within a tenth of the whole board's
+        // gain.
+        assert!(
+            stripes < start && start - stripes > 0.9 * (start - one),
+            "{start} → {stripes}, whole {one}"
+        );
+    }
+
+    #[test]
+    fn striped_refinement_is_the_same_on_any_number_of_threads() {
+        let (map, cells) = perturbed(50, 30, 9, 800);
+        let layout = map.layout();
+        let params = Params {
+            refine_moves_per_region: 100,
+            ..Params::default()
+        };
+        let links = Links::of(&layout);
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let shares = std::sync::Mutex::new(Vec::new());
+            let at = pool.install(|| {
+                anneal_in_stripes(&layout, &links, &cells, &params, 5, 3, &|share| {
+                    shares.lock().unwrap().push(share);
+                    true
+                })
+            });
+            (
+                at.unwrap(),
+                shares.into_inner().unwrap().iter().sum::<f64>(),
+            )
+        };
+        let (one, share) = on(1);
+        assert_eq!(on(4).0, one);
+        assert_ne!(one, cells);
+        assert!((share - 1.0).abs() < 1e-9, "{share}");
+        assert_eq!(
+            anneal_in_stripes(&layout, &links, &cells, &params, 5, 3, &|_| false),
+            None
         );
     }
 
