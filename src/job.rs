@@ -20,7 +20,8 @@ pub struct Job {
     pub pin_row_field: Option<String>,
     /// Destination dataset path.
     pub dst: String,
-    /// GDAL driver short name (`-f`); guessed from the extension, else GeoPackage, when `None`.
+    /// GDAL driver short name (`-f`); guessed from the extension (refused when no
+    /// driver writes it), else GeoPackage, when `None`.
     pub format: Option<String>,
     /// Output layer name (`-nln`); the source layer's name when `None`.
     pub layer_name: Option<String>,

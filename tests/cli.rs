@@ -330,6 +330,50 @@ fn a_failed_run_with_overwrite_leaves_the_old_destination() {
     assert_eq!(scratch.listing(), ["out.gpkg", "us_states.gpkg"]);
 }
 
+#[test]
+fn outputs_that_would_mislead_or_hang_are_refused_before_any_work() {
+    let scratch = Scratch::new("refused-outputs");
+    let src = scratch.input("us_states");
+    let run = |extra: &[&str], dst: &Path| {
+        let mut args = vec!["-q", "-id", "id"];
+        args.extend(extra);
+        args.extend([p(dst), p(&src)]);
+        snakegrid(args)
+    };
+    // This GDAL writes no Parquet: a GeoPackage named .parquet would mislead.
+    let parquet = scratch.path("grid.parquet");
+    assert_fails(&run(&[], &parquet), 1, ".parquet");
+    // An empty layer name, a geocentric CRS (no map plane), a CRS GDAL cannot read (GDAL's
+    // reason, not an error code), a destination in a folder that does not exist.
+    let gpkg = scratch.path("grid.gpkg");
+    assert_fails(&run(&["-nln", ""], &gpkg), 1, "-nln");
+    assert_fails(&run(&["-t_srs", "EPSG:4978"], &gpkg), 1, "geocentric");
+    let garbage = run(&["-t_srs", "garbage"], &gpkg);
+    assert_fails(&garbage, 1, "invalid CRS \"garbage\"");
+    assert!(
+        !stderr(&garbage).contains("returned error"),
+        "{}",
+        stderr(&garbage)
+    );
+    assert_fails(
+        &run(&[], &scratch.path("nowhere/grid.gpkg")),
+        1,
+        "does not exist",
+    );
+    // Opening a named pipe waits for a writer: as source or destination it is refused, not a
+    // hang.
+    let fifo = scratch.path("pipe");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    assert_fails(&run(&["-overwrite"], &fifo), 1, "named pipe");
+    let from_pipe = snakegrid(["-q", p(&gpkg), p(&fifo)]);
+    assert_fails(&from_pipe, 1, "named pipe");
+    assert_eq!(scratch.listing(), ["pipe", "us_states.gpkg"]);
+}
+
 /// Writes a GeoPackage layer `name` (field `code`, null when "") with the given WKT geometries
 /// (None: null).
 fn write_layer(path: &Path, name: &str, rows: &[(&str, Option<&str>)]) {
@@ -749,7 +793,12 @@ fn shapefile_and_geojson_outputs() {
         &[100, 1, 1]
     );
 
-    // -overwrite replaces a Shapefile with its sidecars.
+    // -overwrite replaces a Shapefile with its sidecars, also those GDAL does not list but
+    // other programs leave: their spatial index would be corrupt beside the new file, and a
+    // code page of another encoding would misread its text.
+    for stale in ["grid.sbn", "grid.SBX", "grid.cpg"] {
+        std::fs::write(scratch.path(stale), b"stale").unwrap();
+    }
     assert_success(&snakegrid([
         "-q",
         "-overwrite",
@@ -762,6 +811,13 @@ fn shapefile_and_geojson_outputs() {
     ]));
     let (_, rows) = read_rows(&shp);
     assert_eq!(assert_grid(&rows, "abbr").len(), 49);
+    let listing = scratch.listing();
+    assert!(
+        !listing.iter().any(|n| n == "grid.sbn" || n == "grid.SBX"),
+        "stale indexes kept: {listing:?}"
+    );
+    let code_page = std::fs::read(scratch.path("grid.cpg")).unwrap_or_default();
+    assert_ne!(code_page, b"stale", "a stale code page kept");
 }
 
 #[test]

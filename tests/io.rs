@@ -78,7 +78,7 @@ fn write_blocks(path: &Path, srs: Option<u32>) {
             format!("2024-05-06 07:08:{:02}", k),
             (k % 2).to_string(),
             format!("CAFE{k:02X}"),
-            "stale".to_owned(),
+            format!("stale{k}"),
         ];
         for (i, value) in values.iter().enumerate() {
             feature.set_field_string(i, value).unwrap();
@@ -194,6 +194,30 @@ fn every_source_field_keeps_its_name_type_subtype_and_value() {
         assert_eq!(row[..9], source_row[..9]);
         assert_eq!(row[9], cells[row[0].as_str()].to_string());
     }
+
+    // The metadata name the ids' field in this layer and in the source, which differ when the
+    // id field is the one written under a new name.
+    let id_fields = |dst: &Path| {
+        use gdal::Metadata;
+        let dataset = Dataset::open(dst).unwrap();
+        let layer = dataset.layer(0).unwrap();
+        let item = |key: &str| layer.metadata_item(key, "").unwrap();
+        (
+            item("SNAKEGRID_ID_FIELD"),
+            item("SNAKEGRID_SOURCE_ID_FIELD"),
+        )
+    };
+    assert_eq!(id_fields(&dst), ("code".into(), "code".into()));
+    let renamed = scratch.path("by_grid_col.gpkg");
+    let by_grid_col = Job {
+        id_field: Some("grid_col".into()),
+        ..job(&src, &renamed)
+    };
+    run(&by_grid_col, &Params::default(), &|_, _| true).unwrap();
+    assert_eq!(
+        id_fields(&renamed),
+        ("src_grid_col".into(), "grid_col".into())
+    );
 }
 
 #[test]

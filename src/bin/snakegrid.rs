@@ -31,7 +31,7 @@ struct Cli {
     /// Source layer [default: the first layer]
     #[arg(value_name = "SRC_LAYER")]
     src_layer: Option<String>,
-    /// Output format, a GDAL vector driver short name [default: from DST's extension, else GPKG]
+    /// Output format, a GDAL vector driver short name [default: from DST's extension (refused if no driver writes it); GPKG without one]
     #[arg(short = 'f', value_name = "FORMAT", allow_hyphen_values = true)]
     format: Option<String>,
     /// Name of the output layer [default: the source layer's name]

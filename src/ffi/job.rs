@@ -60,7 +60,8 @@ pub unsafe extern "C" fn snakegrid_job_free(job: *mut DatasetJob) {
 ///   (whole numbers; null: free), both or neither; with pins, grid_col and grid_row are
 ///   numbered in the pins' frame (method.md §10);
 /// - "dst": destination dataset path; required;
-/// - "format": GDAL driver short name (default: from the extension, else GPKG);
+/// - "format": GDAL driver short name (default: from the extension, refused when no
+///   driver writes it; GPKG without one);
 /// - "layer_name": output layer name (default: the source layer's);
 /// - "s_srs": the source's CRS, any definition GDAL accepts, in place of the one it has;
 /// - "target_srs": working CRS, any definition GDAL accepts (default: the source's if

@@ -83,7 +83,7 @@ pub(crate) fn plan(
             })
         }
         (Some(source), None) => Ok(Plan {
-            working: Some(source.clone()),
+            working: Some(refuse_geocentric(source).map(|_| source.clone())?),
             transform: None,
             note: None,
         }),
@@ -93,10 +93,32 @@ pub(crate) fn plan(
 /// A CRS from any definition GDAL accepts (EPSG code, WKT, PROJ string, file), with the
 /// traditional GIS axis order (x = easting or longitude).
 pub(crate) fn parse(session: &Session, definition: &str) -> Result<SpatialRef, Error> {
-    let mut srs = SpatialRef::from_definition(definition)
-        .map_err(|e| session.io_error(&format!("invalid CRS {definition:?}"), e))?;
+    let mut srs = SpatialRef::from_definition(definition).map_err(|_| {
+        // The binding's error is only the failing method's code; GDAL's own message says why.
+        let reason = session.take_error().unwrap_or_else(|| {
+            "GDAL recognises no EPSG code, WKT, PROJ string or file in it".into()
+        });
+        Error::Io(format!("invalid CRS {definition:?}: {reason}"))
+    })?;
     srs.set_axis_mapping_strategy(AxisMappingStrategy::TraditionalGisOrder);
+    refuse_geocentric(&srs)?;
     Ok(srs)
+}
+
+/// A geocentric CRS (3D Cartesian axes through the Earth's centre) has no map plane to lay
+/// cells out on; its polygons would be written flattened and meaningless.
+fn refuse_geocentric(srs: &SpatialRef) -> Result<(), Error> {
+    if !srs.is_geocentric() {
+        return Ok(());
+    }
+    Err(Error::input(
+        None,
+        format!(
+            "the CRS {} is geocentric (3D axes through the Earth's centre), which has no map \
+             plane for the cells: give -t_srs a projected CRS",
+            describe(srs)
+        ),
+    ))
 }
 
 /// The layer's CRS with the traditional GIS axis order, which GDAL 3 does not give EPSG:4326 by

@@ -125,7 +125,11 @@ impl Destination {
         let format = old.driver().short_name();
         let output = driver.short_name();
         let layers: Vec<String> = old.layers().map(|l| l.name()).collect();
-        let files = own_files(&path, &file_list(&old));
+        let mut files = own_files(&path, &file_list(&old));
+        if format == "ESRI Shapefile" {
+            // Deduplicated with the rest below.
+            files.extend(shapefile_indexes(&path));
+        }
         let single_file = files.iter().all(|f| f.file_name() == path.file_name());
         if format == output && single_file && layers_in_place {
             let same = layers.iter().find(|l| l.eq_ignore_ascii_case(layer));
@@ -224,6 +228,7 @@ fn existing(path: &Path, what: &str, mode: Mode) -> Result<Option<Vec<PathBuf>>,
     let Ok(metadata) = fs::symlink_metadata(path) else {
         return Ok(None);
     };
+    super::paths::refuse_special_file(what, path)?;
     if metadata.is_dir() {
         return Err(Error::Io(format!(
             "the {what} {shown:?} is a folder: snakegrid does not replace or update folders, \
@@ -251,6 +256,40 @@ fn existing(path: &Path, what: &str, mode: Mode) -> Result<Option<Vec<PathBuf>>,
 /// The files of a dataset at `path` that belong to it alone: those GDAL lists in the same folder
 /// whose names start as `path`'s does (`grid.shp` → `grid.dbf`, `grid.shp.xml`). A dataset may
 /// list files it only refers to (a VRT's sources), which are not its to lose.
+/// Files beside the Shapefile `path` that describe its old data but that GDAL does not list:
+/// other programs' spatial indexes and code page. Left beside a new Shapefile, the indexes are
+/// corrupt and the code page misreads its text.
+fn shapefile_indexes(path: &Path) -> Vec<PathBuf> {
+    const SIDECARS: [&str; 10] = [
+        "sbn", "sbx", "fbn", "fbx", "ain", "aih", "atx", "ixs", "mxs", "cpg",
+    ];
+    let (Some(stem), Some(folder)) = (path.file_stem(), path.parent()) else {
+        return Vec::new();
+    };
+    let folder = if folder.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        folder
+    };
+    let Ok(entries) = fs::read_dir(folder) else {
+        return Vec::new();
+    };
+    let stem = stem.to_string_lossy().to_lowercase();
+    let mut found: Vec<PathBuf> = entries
+        .filter_map(|entry| entry.ok())
+        .map(|entry| entry.file_name().to_string_lossy().into_owned())
+        .filter(|name| {
+            let lower = name.to_lowercase();
+            SIDECARS
+                .iter()
+                .any(|extension| lower == format!("{stem}.{extension}"))
+        })
+        .map(|name| path.with_file_name(name))
+        .collect();
+    found.sort();
+    found
+}
+
 fn own_files(path: &Path, listed: &[String]) -> Vec<PathBuf> {
     let folder = |p: &Path| {
         let parent = match p.parent() {

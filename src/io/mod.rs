@@ -120,6 +120,11 @@ fn run_in(
         .layer_name
         .clone()
         .unwrap_or_else(|| source_layer.clone());
+    if layer_name.trim().is_empty() {
+        return Err(Error::InvalidParameter(
+            "the output layer's name is empty: give -nln a name".into(),
+        ));
+    }
     let source_names: Vec<String> = layer.defn().fields().map(|f| f.name()).collect();
     let taken: Vec<&str> = (source_names.iter().map(String::as_str))
         .chain(write::computed_fields().map(|(name, _)| name))
@@ -317,7 +322,11 @@ impl StagedGrid<'_> {
         // every other layer (their timestamps change), so a layer added in place keeps its
         // metrics in its description only.
         let metadata = match destination.plan {
-            Plan::New => report::metadata(job, self.source_layer, params, map),
+            Plan::New => {
+                let id_field =
+                    (self.ids).map(|(position, _)| self.fields.stored[position].as_str());
+                report::metadata(job, self.source_layer, id_field, params, map)
+            }
             Plan::InPlace { .. } => {
                 notes.push(format!(
                     "the run's parameters and metrics are not written to the metadata tables of \

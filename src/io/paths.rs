@@ -135,6 +135,30 @@ fn archive_of(name: &str) -> Option<PathBuf> {
 }
 
 /// GDALGetFileList: the files the driver says make up the dataset.
+/// Refuses a `path` that is a FIFO, a socket or a device: opening one waits for a writer or
+/// reads a stream, so a run would hang before any check (a symbolic link is judged by its
+/// target). A path that does not exist is left to the caller.
+pub(crate) fn refuse_special_file(what: &str, path: &Path) -> Result<(), Error> {
+    use std::os::unix::fs::FileTypeExt;
+    let Ok(kind) = std::fs::metadata(path).map(|m| m.file_type()) else {
+        return Ok(());
+    };
+    let special = if kind.is_fifo() {
+        "a named pipe (FIFO)"
+    } else if kind.is_socket() {
+        "a socket"
+    } else if kind.is_char_device() || kind.is_block_device() {
+        "a device"
+    } else {
+        return Ok(());
+    };
+    Err(Error::Io(format!(
+        "the {what} {:?} is {special}, not a file or folder: snakegrid reads and writes \
+         datasets in files",
+        path.display()
+    )))
+}
+
 pub(crate) fn file_list(dataset: &Dataset) -> Vec<String> {
     // SAFETY: the dataset handle is valid while `dataset` lives; GDALGetFileList returns a new
     // NULL-terminated list of NUL-terminated strings (or NULL), which is read and then freed

@@ -12,6 +12,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 pub(crate) fn open(session: &Session, src: &str) -> Result<Dataset, Error> {
+    super::paths::refuse_special_file("source", Path::new(src))?;
     let options = DatasetOptions {
         // Verbose errors make GDAL say why (no such file, not recognised) instead of nothing.
         open_flags: GdalOpenFlags::GDAL_OF_VECTOR

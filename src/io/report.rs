@@ -152,9 +152,12 @@ fn rows<'a>(map: &'a GridMap, labels: &'a [String]) -> Vec<RegionRow<'a>> {
 
 /// Layer metadata items: the run's parameters and metrics, for formats that keep them
 /// (GeoPackage stores them in gpkg_metadata; QGIS shows them in the layer's properties).
+/// `id_field`: the field of this layer that holds the ids, which is not the source's name when
+/// that collided with a computed field.
 pub(crate) fn metadata(
     job: &Job,
     layer: &str,
+    id_field: Option<&str>,
     params: &Params,
     map: &GridMap,
 ) -> Vec<(String, String)> {
@@ -166,8 +169,12 @@ pub(crate) fn metadata(
         ("SNAKEGRID_SOURCE".to_owned(), job.src.clone()),
         ("SNAKEGRID_SOURCE_LAYER".to_owned(), layer.to_owned()),
         (
-            "SNAKEGRID_ID_FIELD".to_owned(),
+            "SNAKEGRID_SOURCE_ID_FIELD".to_owned(),
             job.id_field.clone().unwrap_or_else(|| "FID".into()),
+        ),
+        (
+            "SNAKEGRID_ID_FIELD".to_owned(),
+            id_field.unwrap_or("FID").to_owned(),
         ),
     ];
     if let Some(expression) = &job.where_clause {

@@ -43,11 +43,19 @@ impl Staging {
                 destination.display()
             ))
         };
+        let folder = folder_of(destination);
+        if !folder.is_dir() {
+            return Err(Error::Io(format!(
+                "the folder {:?} of the {what} {:?} does not exist",
+                folder.display(),
+                destination.display()
+            )));
+        }
         let prefix = format!(".{}{MARK}", name.display());
         let dir = tempfile::Builder::new()
             .prefix(&prefix)
             .suffix(SUFFIX)
-            .tempdir_in(folder_of(destination))
+            .tempdir_in(&folder)
             .map_err(cannot)?;
         let lock = File::open(dir.path()).map_err(cannot)?;
         lock.try_lock().map_err(|e| cannot(e.into()))?;

@@ -46,16 +46,27 @@ pub(crate) fn computed(cell: &RegionCell) -> Vec<FieldValue> {
         .collect()
 }
 
-/// The driver for `-f`, else the one the destination's extension names, else GeoPackage; it must
-/// write vector data.
+/// The driver for `-f`, else the one the destination's extension names (refused when none
+/// does), else, without an extension, GeoPackage; it must write vector data.
 pub(crate) fn driver(format: Option<&str>, dst: &str) -> Result<Driver, Error> {
     let driver = match format {
         Some(name) => DriverManager::get_driver_by_name(name)
             .map_err(|_| Error::Io(format!("unknown format {name:?} (see ogrinfo --formats)")))?,
         None => match DriverManager::get_output_driver_for_dataset_name(dst, DriverType::Vector) {
             Some(d) => d,
-            None => DriverManager::get_driver_by_name("GPKG")
-                .map_err(|_| Error::Io("this GDAL has no GeoPackage driver; give -f".into()))?,
+            // A name GDAL knows no writer for is a format this GDAL lacks (Parquet, Arrow), not
+            // a GeoPackage under a misleading name.
+            None => match std::path::Path::new(dst).extension() {
+                Some(extension) => {
+                    return Err(Error::Io(format!(
+                        "no vector format of this GDAL writes .{} files ({dst:?}); give -f \
+                         (see ogrinfo --formats) or name the file .gpkg",
+                        extension.to_string_lossy()
+                    )))
+                }
+                None => DriverManager::get_driver_by_name("GPKG")
+                    .map_err(|_| Error::Io("this GDAL has no GeoPackage driver; give -f".into()))?,
+            },
         },
     };
     let says = |key: &str| {
