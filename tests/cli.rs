@@ -374,6 +374,35 @@ fn outputs_that_would_mislead_or_hang_are_refused_before_any_work() {
     assert_eq!(scratch.listing(), ["pipe", "us_states.gpkg"]);
 }
 
+#[test]
+fn a_table_without_geometry_is_refused_as_such() {
+    let scratch = Scratch::new("table-source");
+    let src = scratch.path("table.gpkg");
+    {
+        let mut dataset = DriverManager::get_driver_by_name("GPKG")
+            .unwrap()
+            .create_vector_only(&src)
+            .unwrap();
+        let layer = dataset
+            .create_layer(LayerOptions {
+                name: "attributes",
+                ty: gdal::vector::OGRwkbGeometryType::wkbNone,
+                ..Default::default()
+            })
+            .unwrap();
+        gdal::vector::FieldDefn::new("code", OGRFieldType::OFTString)
+            .unwrap()
+            .add_to_layer(&layer)
+            .unwrap();
+        let mut feature = Feature::new(layer.defn()).unwrap();
+        feature.set_field_string(0, "a").unwrap();
+        feature.create(&layer).unwrap();
+    }
+    let output = snakegrid(["-q", p(&scratch.path("out.gpkg")), p(&src)]);
+    assert_fails(&output, 1, "has no geometry column");
+    assert_eq!(scratch.listing(), ["table.gpkg"]);
+}
+
 /// Writes a GeoPackage layer `name` (field `code`, null when "") with the given WKT geometries
 /// (None: null).
 fn write_layer(path: &Path, name: &str, rows: &[(&str, Option<&str>)]) {

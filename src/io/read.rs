@@ -41,7 +41,7 @@ pub(crate) fn layer<'d>(dataset: &'d Dataset, name: Option<&str>) -> Result<Laye
             format!("its layers: {}", all.join(", "))
         }
     };
-    match name {
+    let layer = match name {
         Some(name) => dataset.layer_by_name(name).map_err(|_| {
             Error::input(
                 None,
@@ -51,7 +51,20 @@ pub(crate) fn layer<'d>(dataset: &'d Dataset, name: Option<&str>) -> Result<Laye
         None => dataset
             .layer(0)
             .map_err(|_| Error::input(None, "the source has no layers")),
+    }?;
+    // An attribute table would otherwise fail on its first feature, as if that one lacked a
+    // geometry.
+    if layer.defn().geom_fields().next().is_none() {
+        return Err(Error::input(
+            None,
+            format!(
+                "the source layer {:?} has no geometry column: it is a table, not regions ({})",
+                layer.name(),
+                names()
+            ),
+        ));
     }
+    Ok(layer)
 }
 
 /// The index of field `name` (exact, else the only case-insensitive match).
