@@ -146,6 +146,47 @@ fn pins_that_split_a_group_or_touch_across_a_gap_are_refused() {
     );
 }
 
+#[test]
+fn a_gap_holds_around_pins_among_another_groups_cells() {
+    // Groups of scattered states (alphabetical runs of eight: a user's arbitrary grouping) and
+    // pins that put a state among another group's cells. A pin cannot yield the moat, so the
+    // cells around it do; before, the split dropped a pin apart from its block's main piece
+    // and let other groups grow up to it.
+    let pins = [("CA", (0, 3)), ("NY", (9, 1)), ("TX", (4, 7))];
+    let mut regions = pinned(states(), &pins);
+    let mut abbrs: Vec<String> = regions.iter().map(|r| r.id.clone()).collect();
+    abbrs.sort();
+    for region in &mut regions {
+        let rank = abbrs.iter().position(|a| *a == region.id).unwrap();
+        region.group = Some((rank / 8).to_string());
+    }
+    let group: HashMap<String, String> = (regions.iter())
+        .map(|r| (r.id.clone(), r.group.clone().unwrap()))
+        .collect();
+    for (cell, tiling) in [
+        ("square", Tiling::Square),
+        ("hex", Tiling::Hex(snakegrid::HexOrientation::Pointy)),
+    ] {
+        let mut params = Params::default();
+        params.set("group_gap", "1").unwrap();
+        params.set("cell", cell).unwrap();
+        let map = run(&regions, &params).unwrap();
+        for a in &map.cells {
+            for b in &map.cells {
+                assert!(
+                    group[&a.id] == group[&b.id] || !tiling.touching((a.q, a.r), (b.q, b.r)),
+                    "{cell}: {} and {} touch across the gap",
+                    a.id,
+                    b.id
+                );
+            }
+        }
+        for (id, pin) in pins {
+            assert_eq!(cell_of(&map, id), pin, "{cell}");
+        }
+    }
+}
+
 /// The cells of `map` as an edited grid layer would give them, with `moves` (id → offset in
 /// cells, y up) applied to the polygons.
 fn edited(map: &GridMap, moves: &[(&str, (f64, f64))], keep: &[&str]) -> Vec<EditedCell> {

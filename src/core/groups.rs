@@ -399,9 +399,15 @@ impl Split<'_> {
         let (mut kept, amiss) = self.rounds(cost);
         let settled = (kept.iter().zip(self.demand)).all(|(patch, &k)| patch.len() == k);
         if self.gap && (amiss > 0 || !settled) {
-            // A patch drops its strays, and is trimmed or grown to its size.
-            for patch in kept.iter_mut() {
-                *patch = pieces_of(self.lattice.tiling, patch).swap_remove(0);
+            // A patch drops its strays, but not its pins (which the patches around them keep
+            // a moat from), and is trimmed or grown to its size.
+            for (b, patch) in kept.iter_mut().enumerate() {
+                let mut main = pieces_of(self.lattice.tiling, patch).swap_remove(0);
+                let pins: Vec<Position> = (patch.iter().copied())
+                    .filter(|p| self.fixed.get(p) == Some(&b) && !main.contains(p))
+                    .collect();
+                main.extend(pins);
+                *patch = main;
             }
             settle_sizes(
                 self.lattice,
@@ -473,11 +479,15 @@ impl Split<'_> {
             let mut kept: Vec<Vec<Position>> = vec![Vec::new(); blocks];
             for (k, &h) in holder.iter().enumerate() {
                 claimed[h].push(cells[k]);
+                // A pinned cell cannot yield: the cell of another block beside it does.
                 let moat = self.gap
                     && !self.fixed.contains_key(&cells[k])
                     && (tiling.touching_positions(cells[k])).any(|n| {
-                        (index.get(&n))
-                            .is_some_and(|&j| holder.get(j).is_some_and(|&o| yields(h, o)))
+                        (index.get(&n)).is_some_and(|&j| {
+                            holder.get(j).is_some_and(|&o| {
+                                o != h && (yields(h, o) || self.fixed.contains_key(&n))
+                            })
+                        })
                     });
                 if !moat {
                     kept[h].push(cells[k]);
