@@ -82,11 +82,14 @@ pub(crate) fn plan(
                 working: Some(working),
             })
         }
-        (Some(source), None) => Ok(Plan {
-            working: Some(refuse_geocentric(source).map(|_| source.clone())?),
-            transform: None,
-            note: None,
-        }),
+        (Some(source), None) => {
+            refuse_geocentric(source)?;
+            Ok(Plan {
+                working: Some(source.clone()),
+                transform: None,
+                note: None,
+            })
+        }
     }
 }
 

@@ -253,9 +253,6 @@ fn existing(path: &Path, what: &str, mode: Mode) -> Result<Option<Vec<PathBuf>>,
     Ok(Some(files))
 }
 
-/// The files of a dataset at `path` that belong to it alone: those GDAL lists in the same folder
-/// whose names start as `path`'s does (`grid.shp` → `grid.dbf`, `grid.shp.xml`). A dataset may
-/// list files it only refers to (a VRT's sources), which are not its to lose.
 /// Files beside the Shapefile `path` that describe its old data but that GDAL does not list:
 /// other programs' spatial indexes and code page. Left beside a new Shapefile, the indexes are
 /// corrupt and the code page misreads its text.
@@ -263,15 +260,10 @@ fn shapefile_indexes(path: &Path) -> Vec<PathBuf> {
     const SIDECARS: [&str; 10] = [
         "sbn", "sbx", "fbn", "fbx", "ain", "aih", "atx", "ixs", "mxs", "cpg",
     ];
-    let (Some(stem), Some(folder)) = (path.file_stem(), path.parent()) else {
+    let Some(stem) = path.file_stem() else {
         return Vec::new();
     };
-    let folder = if folder.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        folder
-    };
-    let Ok(entries) = fs::read_dir(folder) else {
+    let Ok(entries) = fs::read_dir(super::staging::folder_of(path)) else {
         return Vec::new();
     };
     let stem = stem.to_string_lossy().to_lowercase();
@@ -290,6 +282,9 @@ fn shapefile_indexes(path: &Path) -> Vec<PathBuf> {
     found
 }
 
+/// The files of a dataset at `path` that belong to it alone: those GDAL lists in the same folder
+/// whose names start as `path`'s does (`grid.shp` → `grid.dbf`, `grid.shp.xml`). A dataset may
+/// list files it only refers to (a VRT's sources), which are not its to lose.
 fn own_files(path: &Path, listed: &[String]) -> Vec<PathBuf> {
     let folder = |p: &Path| {
         let parent = match p.parent() {

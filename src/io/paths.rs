@@ -134,7 +134,6 @@ fn archive_of(name: &str) -> Option<PathBuf> {
     }
 }
 
-/// GDALGetFileList: the files the driver says make up the dataset.
 /// Refuses a `path` that is a FIFO, a socket or a device: opening one waits for a writer or
 /// reads a stream, so a run would hang before any check (a symbolic link is judged by its
 /// target). A path that does not exist is left to the caller.
@@ -159,6 +158,7 @@ pub(crate) fn refuse_special_file(what: &str, path: &Path) -> Result<(), Error> 
     )))
 }
 
+/// GDALGetFileList: the files the driver says make up the dataset.
 pub(crate) fn file_list(dataset: &Dataset) -> Vec<String> {
     // SAFETY: the dataset handle is valid while `dataset` lives; GDALGetFileList returns a new
     // NULL-terminated list of NUL-terminated strings (or NULL), which is read and then freed
