@@ -97,20 +97,20 @@ def main():
 
     # GeoJSON keeps no schema without features, so no -id field either.
     geojson("empty_layer.geojson", [])
-    case("empty_layer.geojson", "error", "the source layer has no features", id_field="-")
+    case("empty_layer.geojson", "invalid_input", "the source layer has no features", id_field="-")
 
     geojson("points.geojson", [feature("p1", "Point", [500000, 5000000]), feature("p2", "Point", [501000, 5000000])])
-    case("points.geojson", "error", "feature p1: the geometry is a POINT")
+    case("points.geojson", "invalid_input", "feature p1: the geometry is a POINT")
 
     geojson("lines.geojson", [feature("l1", "LineString", [[500000, 5000000], [501000, 5000000]])] + block(2, 1))
-    case("lines.geojson", "error", "feature l1: the geometry is a LINESTRING")
+    case("lines.geojson", "invalid_input", "feature l1: the geometry is a LINESTRING")
 
     geojson("null_geometry.geojson", block(2, 2) + [feature("nothing", None, None)])
-    case("null_geometry.geojson", "error", "feature nothing: the geometry is null")
+    case("null_geometry.geojson", "invalid_input", "feature nothing: the geometry is null")
 
     # GDAL reads a GeoJSON polygon without coordinates as no geometry at all.
     geojson("empty_geometry.geojson", block(2, 2) + [feature("hollow", "Polygon", [])])
-    case("empty_geometry.geojson", "error", "feature hollow: the geometry is null")
+    case("empty_geometry.geojson", "invalid_input", "feature hollow: the geometry is null")
 
     # A bow-tie: the ring crosses itself in the middle; repaired into its two triangles.
     x, y = 502000.0, 5000000.0
@@ -126,7 +126,7 @@ def main():
     # Two distinct points: no area, whatever closes it.
     short = [[[502000, 5000000], [503000, 5000000], [502000, 5000000]]]
     geojson("short_ring.geojson", block(2, 1) + [feature("short", "Polygon", short)])
-    case("short_ring.geojson", "error", "feature short:")
+    case("short_ring.geojson", "invalid_input", "feature short:")
 
     dup = square(502000, 5000000, 1000)[0]
     dup = [dup[0], dup[1], dup[1], dup[1], dup[2], dup[3], dup[3], dup[4]]
@@ -136,7 +136,7 @@ def main():
     # A region that is a line traced there and back: zero area, nothing to repair.
     sliver = [[[502000, 5000000], [503000, 5000000], [504000, 5000000], [502000, 5000000]]]
     geojson("zero_area_sliver.geojson", block(2, 1) + [feature("sliver", "Polygon", sliver)])
-    case("zero_area_sliver.geojson", "error", "feature sliver:")
+    case("zero_area_sliver.geojson", "invalid_input", "feature sliver:")
 
     # A good square with a zero-width spike: repaired to the square.
     spiked = [[[502000, 5000000], [503000, 5000000], [503000, 5000500], [504000, 5000500],
@@ -152,12 +152,12 @@ def main():
     dupes = block(2, 2)
     dupes[3]["properties"]["code"] = "r00"
     geojson("duplicate_ids.geojson", dupes)
-    case("duplicate_ids.geojson", "error", "feature r00: the id is not unique")
+    case("duplicate_ids.geojson", "invalid_input", "feature r00: the id is not unique")
 
     nulls = block(2, 2)
     nulls[2]["properties"]["code"] = None
     geojson("null_ids.geojson", nulls)
-    case("null_ids.geojson", "error", "feature FID 2: the id is null")
+    case("null_ids.geojson", "invalid_input", "feature FID 2: the id is null")
 
     geojson("one_region.geojson", block(1, 1))
     case("one_region.geojson", "ok", "-")
@@ -200,12 +200,18 @@ def main():
     nan = square(502000, 5000000, 1000)
     nan[0][2] = [math.nan, 5001000]
     geojson("nan_coordinate.geojson", block(2, 1) + [feature("nan", "Polygon", nan)])
-    case("nan_coordinate.geojson", "error", "feature nan: the geometry has a NaN or infinite coordinate")
+    case("nan_coordinate.geojson", "invalid_input", "feature nan: the geometry has a NaN or infinite coordinate")
 
     inf = square(502000, 5000000, 1000)
     inf[0][1] = [math.inf, 5000000]
     geojson("infinite_coordinate.geojson", block(2, 1) + [feature("inf", "Polygon", inf)])
-    case("infinite_coordinate.geojson", "error", "feature inf: the geometry has a NaN or infinite coordinate")
+    case("infinite_coordinate.geojson", "invalid_input", "feature inf: the geometry has a NaN or infinite coordinate")
+
+    # Finite, but its square overflows: the areas would be infinite.
+    huge = square(502000, 5000000, 1000)
+    huge[0][2] = [1.0e300, 5001000]
+    geojson("huge_coordinate.geojson", block(2, 1) + [feature("huge", "Polygon", huge)])
+    case("huge_coordinate.geojson", "invalid_input", "feature huge: a coordinate (1.0e300) is beyond ±1e100")
 
     non_utf8_shapefile("non_utf8.shp")
     case("non_utf8.shp", "ok", "-")
@@ -214,7 +220,7 @@ def main():
     case("three_in_a_line.geojson", "ok", "-")
 
     with open(os.path.join(OUT, "cases.tsv"), "w", encoding="utf-8") as f:
-        f.write("# file\tid field\texpected\ttext the error message or a note must hold (- for none)\n")
+        f.write("# file\tid field\texpected (ok, or the kind of error: invalid_input, io_error)\ttext the error message or a note must hold (- for none)\n")
         for c in cases:
             f.write("\t".join(c) + "\n")
 

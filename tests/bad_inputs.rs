@@ -273,6 +273,25 @@ fn coordinates_out_of_proportion_are_refused_by_name() {
     assert!(
         error
             .to_string()
+            .starts_with("feature needle: a coordinate (3.1e231) is beyond ±1e100"),
+        "{error}"
+    );
+    // Within that range, a needle 1e50 units long and 1e-40 wide reaches 5e44 times the side
+    // of its own area's square from its centre.
+    let needle = snakegrid::Region {
+        id: "needle".into(),
+        geometry: geo::MultiPolygon(vec![geo::Rect::new(
+            geo::coord! { x: 0.0, y: 0.0 },
+            geo::coord! { x: 1e50, y: 1e-40 },
+        )
+        .to_polygon()]),
+        group: None,
+        pin: None,
+    };
+    let error = generate(&[needle], &Params::default(), &|_, _| true).unwrap_err();
+    assert!(
+        error
+            .to_string()
             .starts_with("feature needle: the geometry reaches more than"),
         "{error}"
     );

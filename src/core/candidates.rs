@@ -38,6 +38,10 @@ use std::sync::{Arc, Mutex};
 /// needle-thin region 1e231 units long.
 const MAX_SPAN: f64 = 1e6;
 
+/// The largest coordinate taken: the squares of coordinates and the areas of rings stay far
+/// from overflow (1e300 squared is infinite, and the layer would seem to have no area).
+const LARGEST_COORDINATE: f64 = 1e100;
+
 /// The share of the input's preparation that checking the geometry takes (validity at 10⁷
 /// vertices: 3.5 s of about 9 s, BENCHMARKS.md "Dense boundaries"; a little less at 10⁶).
 const CHECKING_SHARE: f64 = 0.3;
@@ -502,6 +506,18 @@ fn validate_geometry(
         return Err(Error::input(
             Some(id),
             "the geometry has a NaN or infinite coordinate",
+        ));
+    }
+    let farthest = (region.geometry.coords_iter())
+        .map(|c| c.x.abs().max(c.y.abs()))
+        .fold(0.0, f64::max);
+    if farthest > LARGEST_COORDINATE {
+        return Err(Error::input(
+            Some(id),
+            format!(
+                "a coordinate ({farthest:.1e}) is beyond ±{LARGEST_COORDINATE:e}, too large for \
+                 areas to be computed: rescale the layer or give it its real CRS"
+            ),
         ));
     }
     let Some(problem) = validity::problem(&region.geometry) else {

@@ -330,11 +330,17 @@ fn angle_deg(u: Coord<f64>, v: Coord<f64>) -> Option<f64> {
     Some(cross.atan2(dot).abs().to_degrees())
 }
 
+/// A correlation this near 0 is rounding noise (see [`fit`]).
+const ROUNDING: f64 = 1e-9;
+
 /// The least-squares scale s and translation t minimising Σ|s·from_i + t − onto_i|².
 ///
 /// Closed form: with the means f̄, ō, s = Σ(f_i − f̄)·(o_i − ō) / Σ|f_i − f̄|² and t = ō − s·f̄.
 /// The scale is left free in sign. When `from` has no spread (one region) or the best scale is
-/// exactly 0, the scale is taken as 1 and only the shift fitted (as the judge does).
+/// 0, the scale is taken as 1 and only the shift fitted (as the judge does). The scale counts as
+/// 0 when the correlation of the two point sets is within [`ROUNDING`] of it: a row of cells
+/// fitted to a column of regions has an exact covariance of 0, which rounding in the frames'
+/// transforms turns into 1e-16 and a location of 1e15 cells.
 pub(crate) fn fit(from: &[Coord<f64>], onto: &[Coord<f64>]) -> (f64, Coord<f64>) {
     let n = from.len().max(1) as f64;
     let mean = |points: &[Coord<f64>]| {
@@ -344,13 +350,15 @@ pub(crate) fn fit(from: &[Coord<f64>], onto: &[Coord<f64>]) -> (f64, Coord<f64>)
             / n
     };
     let (fm, om) = (mean(from), mean(onto));
-    let (mut covariance, mut variance) = (0.0, 0.0);
+    let (mut covariance, mut variance, mut spread) = (0.0, 0.0, 0.0);
     for (&f, &o) in from.iter().zip(onto) {
         let (df, d_o) = (f - fm, o - om);
         covariance += df.x * d_o.x + df.y * d_o.y;
         variance += df.x * df.x + df.y * df.y;
+        spread += d_o.x * d_o.x + d_o.y * d_o.y;
     }
-    let scale = if variance > 0.0 && covariance != 0.0 && from.len() > 1 {
+    let correlated = covariance.abs() > ROUNDING * (variance * spread).sqrt();
+    let scale = if variance > 0.0 && correlated && from.len() > 1 {
         covariance / variance
     } else {
         1.0
@@ -849,6 +857,37 @@ mod tests {
         let mut sorted: Vec<f64> = regions.iter().map(|r| r.displacement).collect();
         sorted.sort_by(f64::total_cmp);
         assert!((m.location_p90 - (sorted[7] + 0.2 * (sorted[8] - sorted[7]))).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_row_fitted_to_a_column_keeps_its_scale() {
+        // Five strips stacked up, laid out in a row: the exact covariance is 0 (the judge then
+        // fits the shift alone), and rounding in a transform must not make it a tiny scale.
+        let column: Vec<Coord<f64>> = (0..5)
+            .map(|k| Coord {
+                x: 50.0,
+                y: k as f64,
+            })
+            .collect();
+        let row: Vec<Coord<f64>> = (0..5)
+            .map(|k| Coord {
+                x: 10.0 * k as f64,
+                y: 1e-15 * k as f64,
+            })
+            .collect();
+        assert_eq!(fit(&row, &column).0, 1.0);
+        // A weak but real correlation keeps its fitted scale.
+        let tilted: Vec<Coord<f64>> = row
+            .iter()
+            .map(|&c| {
+                c + Coord {
+                    x: 0.0,
+                    y: 1e-3 * c.x,
+                }
+            })
+            .collect();
+        let (scale, _) = fit(&tilted, &column);
+        assert!(scale > 0.0 && scale < 1e-3, "{scale}");
     }
 
     #[test]
