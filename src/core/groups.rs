@@ -521,13 +521,16 @@ impl Split<'_> {
             }
             if self.gap {
                 // Half the difference each round, so that the sizes settle rather than swing:
-                // a moat's size jumps with its patch's.
+                // a moat's size jumps with its patch's. Rounded up both ways: rounded down, a
+                // patch one cell over its size never shrank, and its extra cell strayed and was
+                // banned round after round (us_counties, with the gap: 0.841 of the adjacent
+                // states within 2 cells, 0.850 rounded up; 40 Voronoi groups 0.898 → 0.949).
                 for (b, size) in sizes.iter_mut().enumerate() {
                     let (k, now) = (demand[b], kept_sizes[b]);
                     if now < k {
                         *size += (k - now).div_ceil(2);
                     } else {
-                        *size = (*size - (now - k) / 2).max(k);
+                        *size = (*size - (now - k).div_ceil(2)).max(k);
                     }
                 }
             }
