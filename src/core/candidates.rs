@@ -1251,7 +1251,10 @@ mod tests {
         assert_eq!(params.refined_count(177, 27), 27);
         assert_eq!(params.refined_count(222, 27), 27);
         assert_eq!(params.refined_count(1000, 27), 6);
-        assert_eq!(params.refined_count(3107, 9), 2);
+        assert_eq!(params.refined_count(2999, 9), 3);
+        // One, in stripes, from 3,000 regions on.
+        assert_eq!(params.refined_count(3000, 9), 1);
+        assert_eq!(params.refined_count(3107, 9), 1);
         assert_eq!(params.refined_count(33_000, 1), 1);
         // Never more than the candidates.
         assert_eq!(params.refined_count(10, 5), 5);

@@ -781,8 +781,8 @@ pub static PARAMETERS: &[Parameter] = &[
         help: "How many of the candidate layouts are refined: the best ones by the same \
              ranking before refinement, which picks the best refined one too (the refinement \
              moves every candidate about alike). none: every candidate up to 222 regions, then \
-             about 6,000 / regions (at least 1), since the refinement is most of a layout's \
-             time.",
+             about 6,000 / regions, and one from 3,000 regions on (refined in stripes on \
+             every core), since the refinement is most of a layout's time.",
         access: accessors!(max_refined, OptionalInteger),
     },
     Parameter {
@@ -999,10 +999,12 @@ pub fn parameter(name: &str) -> Option<&'static Parameter> {
 const REGION_LAYOUTS: usize = 27_000;
 
 /// Region-layouts the default budget refines: every candidate up to 222 regions (all the
-/// shared layers but the US counties), fewer beyond. Measured on 27 candidates of 3,000
-/// Voronoi regions (BENCHMARKS.md): the ranking of the layouts before refinement and after
-/// agree (correlation 0.98), and the best before is the best after; the refinement costs
-/// about 1.5 times what the Snake run, assignment and scoring of a layout cost together.
+/// shared layers but the US counties), fewer beyond, and one from
+/// [`super::refine::STRIPE_REGIONS`] regions on, refined in stripes on every core. Measured on
+/// 27 candidates of 3,000 Voronoi regions (BENCHMARKS.md): the ranking of the layouts before
+/// refinement and after agree (correlation 0.98), and the best before is the best after; the
+/// refinement costs about 1.5 times what the Snake run, assignment and scoring of a layout
+/// cost together.
 const REFINED_REGION_LAYOUTS: usize = 6_000;
 
 impl Params {
@@ -1025,9 +1027,13 @@ impl Params {
     /// How many of `layouts` candidate layouts of `regions` regions are refined: `max_refined`,
     /// or by the number of regions; at least one, at most all of them.
     pub fn refined_count(&self, regions: usize, layouts: usize) -> usize {
-        let budget = self
-            .max_refined
-            .unwrap_or_else(|| REFINED_REGION_LAYOUTS.div_ceil(regions.max(1)));
+        let budget = self.max_refined.unwrap_or_else(|| {
+            if regions >= super::refine::STRIPE_REGIONS {
+                1
+            } else {
+                REFINED_REGION_LAYOUTS.div_ceil(regions.max(1))
+            }
+        });
         budget.clamp(1, layouts.max(1))
     }
 
