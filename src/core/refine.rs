@@ -266,7 +266,7 @@ impl Search<'_> {
 /// one layout in two stripes against two layouts whole, each on a core: 3.4 s against 4.4 s,
 /// and over seeds 0–3 the same adjacency (0.799 against 0.798), orientation 24.1° against
 /// 24.4°, location 4.63 against 4.61 cells, shape 0.913 against 0.917 (BENCHMARKS.md).
-pub const STRIPE_REGIONS: usize = 3_000;
+pub(crate) const STRIPE_REGIONS: usize = 3_000;
 
 /// The most stripes, however many the regions: each cut freezes a band of regions for a phase.
 const MOST_STRIPES: usize = 8;
