@@ -1030,15 +1030,18 @@ mod tests {
             let options: Vec<Vec<(usize, f64)>> = (cells.iter())
                 .map(|&c| nearest_centres(&centres, c))
                 .collect();
-            let holder = transport(&options, &demand, &mut vec![0.0; blocks]);
-            let mut count = vec![0; blocks];
-            for &h in &holder {
-                count[h] += 1;
-            }
-            assert_eq!(count, demand);
-            let cost: f64 = (holder.iter().zip(&cells))
-                .map(|(&h, &c)| squared(c, centres[h]))
-                .sum();
+            // The cost of a transport that meets every demand.
+            let cost_of = |holder: &[usize]| {
+                let mut count = vec![0; blocks];
+                for &h in holder {
+                    count[h] += 1;
+                }
+                assert_eq!(count, demand);
+                (holder.iter().zip(&cells))
+                    .map(|(&h, &c)| squared(c, centres[h]))
+                    .sum::<f64>()
+            };
+            let cost = cost_of(&transport(&options, &demand, &mut vec![0.0; blocks]));
             let slots: Vec<Coord<f64>> = (demand.iter().enumerate())
                 .flat_map(|(b, &k)| std::iter::repeat_n(centres[b], k))
                 .collect();
@@ -1054,15 +1057,7 @@ mod tests {
             }
             // From any potentials (a warm start), the same demands met at the same cost.
             let mut warm: Vec<f64> = (0..blocks).map(|_| rng.random_range(-50.0..50.0)).collect();
-            let again = transport(&options, &demand, &mut warm);
-            let mut count = vec![0; blocks];
-            for &h in &again {
-                count[h] += 1;
-            }
-            assert_eq!(count, demand);
-            let warm_cost: f64 = (again.iter().zip(&cells))
-                .map(|(&h, &c)| squared(c, centres[h]))
-                .sum();
+            let warm_cost = cost_of(&transport(&options, &demand, &mut warm));
             assert!(
                 (warm_cost - cost).abs() < 1e-9 * cost.max(1.0),
                 "{warm_cost} against {cost}"
