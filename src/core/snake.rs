@@ -228,10 +228,12 @@ impl<'a> BeamSolver<'a> {
                 },
             )
             .map_err(|e| Error::Internal(format!("symbolic factorisation: {e:?}")))?;
-            let scratch = MemBuffer::new(
+            // Work space for the factorisation and for the solve of both axes' loads.
+            let scratch = MemBuffer::try_new(
                 llt.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
                     .or(llt.solve_in_place_scratch::<f64>(2, Par::Seq)),
-            );
+            )
+            .map_err(|e| Error::Internal(format!("factorisation work space: {e:?}")))?;
             let factor = vec![0.0; llt.len_val()];
             self.pattern = Some(Pattern {
                 matrix,
