@@ -8,7 +8,8 @@
 #
 # Usage: scripts/build-wheel.sh     (prints the wheel's path)
 # Needs: Debian's python3-venv (the build tools go into a venv under target/), network access to
-# crates.io and PyPI on the first run (cargo-zigbuild, hatchling, auditwheel, ziglang).
+# crates.io and PyPI on the first run (hatchling, auditwheel, ziglang, and cargo-zigbuild as PyPI's
+# prebuilt binary rather than compiled by `cargo install`, which cost CI minutes).
 # Only Linux x86-64 is built here; README.md says how Windows and macOS wheels would be made.
 set -euo pipefail
 
@@ -23,11 +24,11 @@ if [ ! -x "$tools/bin/auditwheel" ]; then
         echo "build-wheel: needs Debian's python3-venv (apt-get install python3-venv)" >&2
         exit 1
     }
-    "$tools/bin/pip" install -q hatchling==1.33.0 auditwheel==6.8.2 ziglang==0.17.1
+    "$tools/bin/pip" install -q hatchling==1.33.0 auditwheel==6.8.2 ziglang==0.17.1 \
+        cargo-zigbuild==0.24.1
 fi
-command -v cargo-zigbuild >/dev/null || cargo install --locked cargo-zigbuild@0.24.1
 
-# cargo-zigbuild finds zig through `python3 -m ziglang`: the tools venv's python3 comes first.
+# cargo-zigbuild (the venv's) finds zig through `python3 -m ziglang`: the tools venv comes first.
 # A target folder of its own, so that this build may run beside another cargo command (CI
 # starts it in the background) without either waiting for the other's lock.
 PATH="$tools/bin:$PATH" cargo zigbuild --manifest-path "$root/Cargo.toml" --release --lib \
