@@ -493,10 +493,11 @@ fn vertex_count(p: &MultiPolygon<f64>) -> usize {
 
 /// Topology-preserving Visvalingam simplification to about `target` vertices (§1), or with the
 /// tolerance the user gave. Detail finer than [`FINEST_DETAIL`] goes first, in one pass, so that
-/// dense boundaries cost one pass over their vertices. The tolerance is then found by bisection
-/// with plain Visvalingam, ten times faster than the topology-preserving variant and close
-/// enough for "about", which then runs once. geo preserves topology within each part only, so
-/// a result whose rings cross each other is refused and the tolerance lowered.
+/// dense boundaries cost one pass over their vertices. The tolerance is then the least that
+/// leaves plain Visvalingam (ten times faster than the topology-preserving variant, and close
+/// enough for "about") with `target` vertices ([`tolerance_for`]); the topology-preserving
+/// variant then runs once. geo preserves topology within each part only, so a result whose
+/// rings cross each other is refused and the tolerance lowered.
 fn simplify(union: &MultiPolygon<f64>, target: usize, tolerance: Option<f64>) -> MultiPolygon<f64> {
     if tolerance.is_none() && vertex_count(union) <= target {
         return union.clone();
@@ -513,23 +514,7 @@ fn simplify(union: &MultiPolygon<f64>, target: usize, tolerance: Option<f64>) ->
     let eps = match tolerance {
         Some(eps) => eps,
         None if vertex_count(fine) <= target => return fine.clone(),
-        None => {
-            let too_many = |eps: f64| vertex_count(&fine.simplify_vw(eps)) > target;
-            let (mut lo, mut hi) = (1e-9, 1e-3);
-            while too_many(hi) && hi < 1e9 {
-                lo = hi;
-                hi *= 16.0;
-            }
-            for _ in 0..30 {
-                let mid = (lo * hi).sqrt();
-                if too_many(mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            hi
-        }
+        None => tolerance_for(fine, target),
     };
     let mut eps = eps;
     while eps > 1e-12 {
@@ -540,6 +525,112 @@ fn simplify(union: &MultiPolygon<f64>, target: usize, tolerance: Option<f64>) ->
         eps *= 0.5;
     }
     fine.clone()
+}
+
+/// Tolerances below this simplify nothing that matters (cells² in the unit-cell frame), and a
+/// tolerance of 0 would make geo's Visvalingam return its input unchanged.
+const LEAST_TOLERANCE: f64 = 1e-9;
+
+/// The least Visvalingam tolerance (at least [`LEAST_TOLERANCE`]) with which geo's plain
+/// `simplify_vw` leaves `polygons` at most `target` vertices, or, if none does, the one that
+/// removes all it can. geo's Visvalingam removes the smallest triangle first and stops at the
+/// first larger than the tolerance, and the order it removes them in does not depend on the
+/// tolerance: one run to the end per ring ([`removal_levels`]) gives the count for every
+/// tolerance at once, where a bisection ran the simplification some 35 times (most of the
+/// outline's time on a boundary of long, detailed spikes).
+fn tolerance_for(polygons: &MultiPolygon<f64>, target: usize) -> f64 {
+    let rings =
+        (polygons.0.iter()).flat_map(|p| std::iter::once(p.exterior()).chain(p.interiors()));
+    let mut levels: Vec<f64> = rings.flat_map(removal_levels).collect();
+    levels.sort_unstable_by(f64::total_cmp);
+    // With tolerance `eps`, each ring loses its levels ≤ `eps` (a ring's levels only grow).
+    let to_remove = vertex_count(polygons).saturating_sub(target);
+    let level = match to_remove {
+        0 => LEAST_TOLERANCE,
+        k => levels.get(k - 1).or(levels.last()).copied().unwrap_or(0.0),
+    };
+    level.max(LEAST_TOLERANCE)
+}
+
+/// For each vertex geo's plain Visvalingam removes from `ring` when run to the end, in the order
+/// it removes them, the largest triangle area removed up to and including it: with tolerance
+/// `eps` it removes exactly the vertices whose level is ≤ `eps`. Mirrors geo's loop
+/// (`visvalingam_indices` in geo's simplify_vw.rs: the same heap, filled and updated in the same
+/// order, so that equal areas come out in geo's order too).
+fn removal_levels(ring: &LineString<f64>) -> Vec<f64> {
+    use geo::Triangle;
+    use std::cmp::Ordering;
+    use std::collections::BinaryHeap;
+    /// A vertex and its triangle with the neighbours it had when scored; a min-heap by area.
+    struct Scored {
+        area: f64,
+        current: usize,
+        left: usize,
+        right: usize,
+    }
+    impl Ord for Scored {
+        fn cmp(&self, other: &Scored) -> Ordering {
+            other
+                .area
+                .partial_cmp(&self.area)
+                .unwrap_or(Ordering::Equal)
+        }
+    }
+    impl PartialOrd for Scored {
+        fn partial_cmp(&self, other: &Scored) -> Option<Ordering> {
+            Some(self.cmp(other))
+        }
+    }
+    impl PartialEq for Scored {
+        fn eq(&self, other: &Scored) -> bool {
+            self.area == other.area
+        }
+    }
+    impl Eq for Scored {}
+
+    let coords = &ring.0;
+    let n = coords.len();
+    let area = |a: usize, c: usize, b: usize| {
+        Triangle::new(coords[a], coords[c], coords[b]).unsigned_area()
+    };
+    // The neighbours still kept, as geo keeps them: -1 or n for none, (0, 0) once removed.
+    let mut adjacent: Vec<(i64, i64)> = (0..n as i64).map(|i| (i - 1, i + 1)).collect();
+    let mut heap: BinaryHeap<Scored> = (1..n.saturating_sub(1))
+        .map(|i| Scored {
+            area: area(i - 1, i, i + 1),
+            current: i,
+            left: i - 1,
+            right: i + 1,
+        })
+        .collect();
+    let mut levels = Vec::with_capacity(n.saturating_sub(2));
+    let mut level = 0.0_f64;
+    while let Some(smallest) = heap.pop() {
+        let (left, right) = adjacent[smallest.current];
+        // Scored before a neighbour went: stale.
+        if (left, right) != (smallest.left as i64, smallest.right as i64) {
+            continue;
+        }
+        level = level.max(smallest.area);
+        levels.push(level);
+        let (ll, _) = adjacent[left as usize];
+        let (_, rr) = adjacent[right as usize];
+        adjacent[left as usize] = (ll, right);
+        adjacent[right as usize] = (left, rr);
+        adjacent[smallest.current] = (0, 0);
+        for (a, c, b) in [(ll, left, right), (left, right, rr)] {
+            if (0..n as i64).contains(&a) && (0..n as i64).contains(&b) {
+                let (a, c, b) = (a as usize, c as usize, b as usize);
+                heap.push(Scored {
+                    area: area(a, c, b),
+                    current: c,
+                    left: a,
+                    right: b,
+                });
+            }
+        }
+    }
+    levels
 }
 
 /// `union` without the vertices nearer than `spacing` to the last vertex kept before them (the
@@ -679,6 +770,73 @@ mod tests {
         MultiPolygon(vec![
             polygon![(x: x, y: y), (x: x + 1.0, y: y), (x: x + 1.0, y: y + 1.0), (x: x, y: y + 1.0)],
         ])
+    }
+
+    /// A ring of `n` vertices round a circle, its radius wiggled by a fixed pattern; `staircase`
+    /// snaps the coordinates to a coarse grid, so that many triangles have equal areas (ties in
+    /// geo's heap).
+    fn wiggly(n: usize, staircase: bool) -> LineString<f64> {
+        let mut coords: Vec<Coord<f64>> = (0..n)
+            .map(|i| {
+                let t = i as f64 / n as f64 * std::f64::consts::TAU;
+                let r = 10.0 + ((i * 7919) % 13) as f64 * 0.05 + (3.0 * t).sin();
+                let c = Coord {
+                    x: r * t.cos(),
+                    y: r * t.sin(),
+                };
+                if staircase {
+                    Coord {
+                        x: (c.x * 4.0).round() / 4.0,
+                        y: (c.y * 4.0).round() / 4.0,
+                    }
+                } else {
+                    c
+                }
+            })
+            .collect();
+        coords.dedup();
+        coords.push(coords[0]);
+        LineString(coords)
+    }
+
+    #[test]
+    fn removal_levels_give_geos_vertex_count_for_every_tolerance() {
+        for (n, staircase) in [(400, false), (400, true), (3, false), (5, true)] {
+            let ring = wiggly(n, staircase);
+            let levels = removal_levels(&ring);
+            for eps in [1e-9, 1e-4, 1e-3, 0.01, 0.03, 0.1, 0.3, 1.0, 10.0, 1e6] {
+                let removed = levels.iter().filter(|&&l| l <= eps).count();
+                assert_eq!(
+                    ring.0.len() - removed,
+                    ring.simplify_vw(eps).0.len(),
+                    "{n} vertices, staircase {staircase}, tolerance {eps}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_tolerance_is_the_least_that_reaches_the_target() {
+        let polygons = MultiPolygon(vec![
+            Polygon::new(wiggly(500, false), vec![]),
+            Polygon::new(wiggly(300, true), vec![]),
+        ]);
+        let all = vertex_count(&polygons);
+        for target in [all, all - 1, 600, 200, 40] {
+            let eps = tolerance_for(&polygons, target);
+            assert!(
+                vertex_count(&polygons.simplify_vw(eps)) <= target,
+                "target {target}"
+            );
+            if eps > LEAST_TOLERANCE {
+                // A hair less keeps too many: the tolerance is the least.
+                let less = eps * (1.0 - 1e-9);
+                assert!(
+                    vertex_count(&polygons.simplify_vw(less)) > target,
+                    "target {target}"
+                );
+            }
+        }
     }
 
     #[test]
