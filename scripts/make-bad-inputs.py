@@ -219,6 +219,14 @@ def main():
     geojson("three_in_a_line.geojson", block(3, 1))
     case("three_in_a_line.geojson", "ok", "-")
 
+    # A curved polygon beside a straight one: GeoJSON holds no curves, GDAL's CSV reader takes
+    # them as WKT.
+    with open(os.path.join(OUT, "curved.csv"), "w", encoding="utf-8") as f:
+        f.write('id,WKT\na,"CURVEPOLYGON(CIRCULARSTRING(0 0,1 1,2 0,1 -1,0 0))"\n'
+                'b,"POLYGON((2 0,3 0,3 1,2 1,2 0))"\n')
+    case("curved.csv", "invalid_input", "feature a: curved geometries (CURVEPOLYGON) are not supported",
+         id_field="id")
+
     with open(os.path.join(OUT, "cases.tsv"), "w", encoding="utf-8") as f:
         f.write("# file\tid field\texpected (ok, or the kind of error: invalid_input, io_error)\ttext the error message or a note must hold (- for none)\n")
         for c in cases:

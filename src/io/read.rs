@@ -4,11 +4,11 @@
 use super::session::Session;
 use crate::core::{Error, Region};
 use crate::crs::LonLatBox;
+use crate::input::{Admission, GeometryKind};
 use gdal::spatial_ref::CoordTransform;
 use gdal::vector::{Feature, FieldValue, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
 use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
 use geo::{CoordsIter, MultiPolygon};
-use std::collections::HashMap;
 use std::path::Path;
 
 pub(crate) fn open(session: &Session, src: &str) -> Result<Dataset, Error> {
@@ -154,12 +154,13 @@ pub(crate) struct SettingFields {
     pub pin: Option<(usize, usize)>,
 }
 
-/// Ids, labels, groups, pins and polygonal geometries of `features`; refuses null or duplicate
-/// ids, pins that are not whole numbers or given by halves ([`crate::pins::pin_of`]) and null,
-/// empty or non-polygonal geometries, naming the feature.
+/// Ids, labels, groups, pins and polygonal geometries of `features`: each is admitted by the
+/// rules every face shares ([`Admission`]: null, empty or repeated ids, null, empty or
+/// non-polygonal geometries, each refused naming the feature); pins that are not whole numbers
+/// or given by halves are refused too ([`crate::pins::pin_of`]).
 pub(crate) fn check(features: &[Feature], fields: &SettingFields) -> Result<Vec<Checked>, Error> {
     let (id_field, label_field, group_field) = (fields.id, fields.label, fields.group);
-    let mut seen: HashMap<String, String> = HashMap::new();
+    let mut admission = Admission::default();
     features
         .iter()
         .enumerate()
@@ -170,25 +171,19 @@ pub(crate) fn check(features: &[Feature], fields: &SettingFields) -> Result<Vec<
             };
             let id = match id_field {
                 Some(i) => feature.field_as_string(i).ok().flatten(),
-                None => feature.fid().map(|fid| fid.to_string()),
-            }
-            .ok_or_else(|| match id_field {
-                Some(_) => Error::input(Some(&fid), "the id is null"),
-                None => Error::input(
-                    Some(&fid),
-                    "the feature has no FID; name an id field with -id",
-                ),
-            })?;
-            if id.is_empty() {
-                return Err(Error::input(Some(&fid), "the id is empty"));
-            }
-            if let Some(first) = seen.insert(id.clone(), fid.clone()) {
-                return Err(Error::input(
-                    Some(&id),
-                    format!("the id is not unique ({first} and {fid} share it)"),
-                ));
-            }
-            let geometry = polygonal(feature.geometry()).map_err(|m| Error::input(Some(&id), m))?;
+                None => Some(feature.fid().map(|fid| fid.to_string()).ok_or_else(|| {
+                    Error::input(
+                        Some(&fid),
+                        "the feature has no FID; name an id field with -id",
+                    )
+                })?),
+            };
+            let geometry = usable(feature.geometry());
+            let name = geometry.map(|g| g.geometry_name()).unwrap_or_default();
+            let id = admission.admit(&fid, id.as_deref(), kind(geometry, &name))?;
+            let geometry = geometry
+                .map(flat_copy)
+                .ok_or_else(|| Error::Internal("an admitted geometry is null".into()))?;
             let label = label_field
                 .and_then(|i| feature.field_as_string(i).ok().flatten())
                 .filter(|l| !l.trim().is_empty())
@@ -228,34 +223,38 @@ fn number(feature: &Feature, index: usize) -> Result<Option<f64>, String> {
     }
 }
 
-/// A copy of `geometry` flattened to 2D when it is a non-empty (multi)polygon.
-fn polygonal(geometry: Option<&Geometry>) -> Result<Geometry, String> {
+/// The feature's geometry, `None` when it has none.
+fn usable(geometry: Option<&Geometry>) -> Option<&Geometry> {
     // The binding hands out a null geometry as a wrapper of a null pointer, which every other
     // call would pass to GDAL.
     // SAFETY: only reads the wrapped pointer, which `Feature::geometry` has just set.
-    let geometry = geometry
-        .filter(|g| !unsafe { g.c_geometry() }.is_null())
-        .ok_or("the geometry is null")?;
+    geometry.filter(|g| !unsafe { g.c_geometry() }.is_null())
+}
+
+/// What `geometry` (whose type name is `name`) is, for [`Admission`].
+fn kind<'n>(geometry: Option<&Geometry>, name: &'n str) -> GeometryKind<'n> {
+    let Some(geometry) = geometry else {
+        return GeometryKind::Null;
+    };
     if geometry.is_empty() {
-        return Err("the geometry is empty".into());
+        return GeometryKind::Empty;
     }
-    let flat = gdal::vector::geometry_type_flatten(geometry.geometry_type());
-    match flat {
+    match gdal::vector::geometry_type_flatten(geometry.geometry_type()) {
         OGRwkbGeometryType::wkbPolygon | OGRwkbGeometryType::wkbMultiPolygon => {
-            let mut copy = geometry.clone();
-            copy.flatten_to_2d();
-            Ok(copy)
+            GeometryKind::Polygonal
         }
-        OGRwkbGeometryType::wkbCurvePolygon | OGRwkbGeometryType::wkbMultiSurface => Err(format!(
-            "curved geometries ({}) are not supported; linearise them first \
-             (ogr2ogr -nlt CONVERT_TO_LINEAR)",
-            geometry.geometry_name()
-        )),
-        _ => Err(format!(
-            "the geometry is a {}, not a polygon or multipolygon",
-            geometry.geometry_name()
-        )),
+        OGRwkbGeometryType::wkbCurvePolygon | OGRwkbGeometryType::wkbMultiSurface => {
+            GeometryKind::Curved(name)
+        }
+        _ => GeometryKind::Other(name),
     }
+}
+
+/// A copy of `geometry` flattened to 2D.
+fn flat_copy(geometry: &Geometry) -> Geometry {
+    let mut copy = geometry.clone();
+    copy.flatten_to_2d();
+    copy
 }
 
 /// The lon/lat extent of every checked geometry of a geographic layer, for the working CRS.
