@@ -68,7 +68,8 @@ fn us_states_beats_tilemaps_and_the_snake_does_real_work() {
     );
     // 9 lattice shifts × (the noise-free run and 2 noise levels).
     assert_eq!(map.candidates.len(), 27);
-    // Ranked by their defects (pieces and holes) first, then by TOPSIS.
+    // Ranked by their defects (pieces, holes, regions nearer another landmass: none on this one
+    // landmass) first, then by TOPSIS.
     let defects = |m: &snakegrid::LayoutMetrics| m.pieces + m.holes;
     assert!(map.candidates.windows(2).all(|w| {
         let (a, b) = (defects(&w[0].metrics), defects(&w[1].metrics));

@@ -320,3 +320,65 @@ fn every_corner_of_the_snake_ranges_lays_out_real_and_large_layers() {
         }
     }
 }
+
+/// Districts either side of a winding river narrower than a tenth of a district (a city on
+/// its river): `columns` columns of `bands` districts on each bank, the banks' edges following
+/// the river's course, neighbouring columns sharing their edges exactly.
+fn river_city(columns: usize, bands: usize) -> Vec<Region> {
+    let course = |x: f64| 3.0 + 1.2 * (x * 0.9).sin() + 0.4 * (x * 2.3).cos();
+    let half_width = 0.04;
+    let top = 6.0;
+    let mut regions = Vec::new();
+    for i in 0..columns {
+        let (x0, x1) = (i as f64, i as f64 + 1.0);
+        for bank in ["s", "n"] {
+            // The bank's span at x, from bottom to top, cut into `bands` districts.
+            let span = |x: f64| match bank {
+                "s" => (0.0, course(x) - half_width),
+                _ => (course(x) + half_width, top),
+            };
+            let at = |x: f64, t: f64| {
+                let (lo, hi) = span(x);
+                Coord {
+                    x,
+                    y: lo + t * (hi - lo),
+                }
+            };
+            for j in 0..bands {
+                let (t0, t1) = (j as f64 / bands as f64, (j + 1) as f64 / bands as f64);
+                let ring = vec![at(x0, t0), at(x1, t0), at(x1, t1), at(x0, t1), at(x0, t0)];
+                regions.push(Region {
+                    id: format!("{bank}{i}-{j}"),
+                    geometry: MultiPolygon(vec![Polygon::new(LineString(ring), vec![])]),
+                    group: None,
+                    pin: None,
+                });
+            }
+        }
+    }
+    regions
+}
+
+#[test]
+fn a_river_narrower_than_a_cell_puts_no_district_on_the_wrong_bank() {
+    // Each bank is a landmass (method.md §6): no district's cell may lie nearer the other bank
+    // (issue 13: a wrong-landmass share of 0). Without wrong-landmass regions counted among a
+    // candidate's defects, the 6×4 city put one on the other bank.
+    for (columns, bands) in [(7, 3), (9, 2), (6, 4)] {
+        let regions = river_city(columns, bands);
+        let map = run(&regions, &Params::default());
+        common::assert_valid_grid(&regions, &map);
+        assert_eq!(
+            map.metrics.wrong_landmass, 0.0,
+            "{columns}×{bands}: {:?}",
+            map.metrics
+        );
+        // A block per bank at most, and no hole.
+        assert!(
+            map.metrics.pieces <= 2,
+            "{columns}×{bands}: {:?}",
+            map.metrics
+        );
+        assert_eq!(map.metrics.holes, 0, "{columns}×{bands}");
+    }
+}

@@ -338,14 +338,19 @@ fn generate_here(
 }
 
 /// The layouts' indices, best first, and their TOPSIS scores: the layout's defects first
-/// (method.md §8 and the cartographer's priorities: each landmass in one piece, no holes), then
-/// TOPSIS over location, adjacency, orientation and shape.
+/// (method.md §8 and the cartographer's priorities: each landmass in one piece, no holes, no
+/// region nearer another landmass than its own), then TOPSIS over location, adjacency,
+/// orientation and shape. A region on the wrong landmass counts as one defect, like a break:
+/// across a river narrower than a cell (a city's districts either side of it), the block
+/// boundary cannot follow every bend, and of the candidates some put a cell across it and others
+/// not.
 fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
     let scores = rank::topsis(
         &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
         params.topsis_weights,
     );
-    let defects = |k: usize| layouts[k].breaks + layouts[k].metrics.holes as usize;
+    let defects =
+        |k: usize| layouts[k].breaks + layouts[k].metrics.holes as usize + layouts[k].misplaced;
     let mut ranking: Vec<usize> = (0..layouts.len()).collect();
     ranking.sort_by(|&a, &b| {
         (defects(a).cmp(&defects(b)))
@@ -733,6 +738,9 @@ struct Layout {
     moved: Vec<Coord<f64>>,
     /// How many times its landmasses' blocks break ([`metrics::landmass_breaks`]).
     breaks: usize,
+    /// How many regions lie nearer another landmass than their own (the wrong-landmass share's
+    /// count).
+    misplaced: usize,
 }
 
 /// The regions' blocks (method.md §10): per landmass of the layout, each group's regions, in
@@ -948,8 +956,11 @@ impl Context<'_> {
         if self.grouped {
             breaks += metrics::landmass_breaks(&positions, &self.blocks.of, lattice.tiling);
         }
+        let counted = (0..cells.len()).filter(|&i| self.home.counts(i)).count();
+        let misplaced = (metrics.wrong_landmass * counted as f64).round() as usize;
         Layout {
             breaks,
+            misplaced,
             lattice,
             cells,
             metrics,
