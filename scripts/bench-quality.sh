@@ -26,11 +26,14 @@ make voronoi 300 1 "$work/voronoi_300.gpkg"
 make voronoi 3000 2 "$work/voronoi_3000.gpkg"
 make islands 3 "$work/islands.gpkg"
 make river 300 4 "$work/river.gpkg"
+# a city's 33 districts on the two banks of a river a tenth of a district wide
+make river 33 6 "$work/river_33.gpkg"
 make archipelago 3000 300 5 "$work/archipelago.gpkg"
 layers=(
     "$data/us_states.gpkg" "$data/nc_counties.gpkg" "$data/virginia_counties.gpkg"
     "$data/world_countries.gpkg" "$data/us_counties.gpkg"
     "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
+    "$work/river_33.gpkg"
     "$work/archipelago.gpkg"
 )
 
