@@ -19,7 +19,9 @@ platform="manylinux_${glibc/./_}_x86_64"
 target=x86_64-unknown-linux-gnu
 
 tools="$root/target/wheel-tools"
-if [ ! -x "$tools/bin/auditwheel" ]; then
+# Keyed on the last tool added, so that a venv an older version of this script made is
+# completed rather than taken as it is.
+if [ ! -x "$tools/bin/cargo-zigbuild" ]; then
     /usr/bin/python3 -m venv "$tools" || {
         echo "build-wheel: needs Debian's python3-venv (apt-get install python3-venv)" >&2
         exit 1

@@ -350,7 +350,7 @@ fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
         params.topsis_weights,
     );
     let defects =
-        |k: usize| layouts[k].breaks + layouts[k].metrics.holes as usize + layouts[k].misplaced;
+        |k: usize| layouts[k].breaks + layouts[k].metrics.holes as usize + layouts[k].astray;
     let mut ranking: Vec<usize> = (0..layouts.len()).collect();
     ranking.sort_by(|&a, &b| {
         (defects(a).cmp(&defects(b)))
@@ -738,9 +738,9 @@ struct Layout {
     moved: Vec<Coord<f64>>,
     /// How many times its landmasses' blocks break ([`metrics::landmass_breaks`]).
     breaks: usize,
-    /// How many regions lie nearer another landmass than their own (the wrong-landmass share's
-    /// count).
-    misplaced: usize,
+    /// How many regions lie nearer another landmass than their own: the wrong-landmass share's
+    /// count, from the share (the regions it counts are the same for every layout).
+    astray: usize,
 }
 
 /// The regions' blocks (method.md §10): per landmass of the layout, each group's regions, in
@@ -957,10 +957,10 @@ impl Context<'_> {
             breaks += metrics::landmass_breaks(&positions, &self.blocks.of, lattice.tiling);
         }
         let counted = (0..cells.len()).filter(|&i| self.home.counts(i)).count();
-        let misplaced = (metrics.wrong_landmass * counted as f64).round() as usize;
+        let astray = (metrics.wrong_landmass * counted as f64).round() as usize;
         Layout {
             breaks,
-            misplaced,
+            astray,
             lattice,
             cells,
             metrics,

@@ -10,11 +10,13 @@ use super::{overlay, Params};
 use geo::orient::{Direction, Orient};
 use geo::{
     Area, BoundingRect, Centroid, Contains, Coord, Intersects, LineString, MultiPolygon, Point,
-    Polygon, SimplifyVw, SimplifyVwPreserve,
+    Polygon, SimplifyVw, SimplifyVwPreserve, Triangle,
 };
 use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, RTreeObject, AABB};
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
 
 /// Distance, in cells, under which two boundaries count as touching: shared borders that were
 /// noded identically meet exactly, but reprojection and rounding leave tiny gaps.
@@ -558,9 +560,6 @@ fn tolerance_for(polygons: &MultiPolygon<f64>, target: usize) -> f64 {
 /// (`visvalingam_indices` in geo's simplify_vw.rs: the same heap, filled and updated in the same
 /// order, so that equal areas come out in geo's order too).
 fn removal_levels(ring: &LineString<f64>) -> Vec<f64> {
-    use geo::Triangle;
-    use std::cmp::Ordering;
-    use std::collections::BinaryHeap;
     /// A vertex and its triangle with the neighbours it had when scored; a min-heap by area.
     struct Scored {
         area: f64,
