@@ -122,7 +122,10 @@ fn first_contact(index: &Runs, rings: &[Vec<Coord<f64>>], by_sweep: bool) -> Opt
 /// wrong, and the sweep stops there. O(n log n) in the segments, however long and close they
 /// are: an index of bounding boxes compares every pair of a star's spikes.
 fn sweep(index: &Runs, rings: &[Vec<Coord<f64>>]) -> Option<Problem> {
-    let mut events: Vec<(Coord<f64>, bool, Swept)> = Vec::new();
+    // The segments in ring order, and two events per segment: where it starts and where it
+    // ends, with its number times two, plus one for the end.
+    let mut segments: Vec<Swept> = Vec::new();
+    let mut events: Vec<(Coord<f64>, usize)> = Vec::new();
     for (ring, coords) in rings.iter().enumerate() {
         for i in 0..coords.len() {
             let s = index.segment(ring, i);
@@ -131,23 +134,23 @@ fn sweep(index: &Runs, rings: &[Vec<Coord<f64>>]) -> Option<Problem> {
             } else {
                 (s.b, s.a)
             };
-            let swept = Swept {
+            events.push((left, 2 * segments.len()));
+            events.push((right, 2 * segments.len() + 1));
+            segments.push(Swept {
                 left,
                 right,
                 ring,
                 index: i,
-            };
-            events.push((left, true, swept));
-            events.push((right, false, swept));
+            });
         }
     }
-    // In the order they were made where they share a point (ring, segment, start before end):
-    // a total order, which an unstable sort (much faster on 70-byte events) keeps.
-    events.sort_unstable_by(|(p, starts, s), (q, other_starts, t)| {
-        (p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)))
-            .then((s.ring, s.index).cmp(&(t.ring, t.index)))
-            .then(other_starts.cmp(starts))
+    // Where events share a point, in ring order, a start before an end: a total order, which
+    // an unstable sort (faster) keeps.
+    events.sort_unstable_by(|(p, e), (q, f)| {
+        (p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y))).then(e.cmp(f))
     });
+    let starts = |e: &(Coord<f64>, usize)| e.1 % 2 == 0;
+    let segment = |e: &(Coord<f64>, usize)| segments[e.1 / 2];
     let mut order: BTreeSet<Key> = BTreeSet::new();
     let check = |u: &Swept, v: &Swept| {
         let (s, t) = (
@@ -163,7 +166,7 @@ fn sweep(index: &Runs, rings: &[Vec<Coord<f64>>]) -> Option<Problem> {
     };
     // Reused for every vertex: the segments through it.
     let mut through: Vec<Swept> = Vec::new();
-    for group in events.chunk_by(|(p, _, _), (q, _, _)| p == q) {
+    for group in events.chunk_by(|(p, _), (q, _)| p == q) {
         let p = group[0].0;
         let below = Key::Probe(p);
         // Every segment through `p`: those in the order that contain it (ending there or
@@ -186,17 +189,21 @@ fn sweep(index: &Runs, rings: &[Vec<Coord<f64>>]) -> Option<Problem> {
             .and_then(Key::swept)
             .copied();
         let ending = through.len();
-        through.extend(group.iter().filter(|e| e.1).map(|e| e.2));
+        through.extend(group.iter().filter(|e| starts(e)).map(segment));
         for (k, u) in through.iter().enumerate() {
             if let Some(problem) = through[k + 1..].iter().find_map(|v| check(u, v)) {
                 return Some(problem);
             }
         }
-        for (_, _, s) in group.iter().filter(|e| !e.1) {
-            order.remove(&Key::Segment(*s));
+        for e in group {
+            if !starts(e) {
+                order.remove(&Key::Segment(segment(e)));
+            }
         }
-        for (_, _, s) in group.iter().filter(|e| e.1) {
-            order.insert(Key::Segment(*s));
+        for e in group {
+            if starts(e) {
+                order.insert(Key::Segment(segment(e)));
+            }
         }
         // The new neighbours: below and above the segments through `p` now (those passing
         // through and those starting here), or each other.
