@@ -6,7 +6,8 @@ use super::geometry::{
     interior_point, interior_point_of_all, nearest_on_segment, point_segment_distance2,
     segments_intersect, RingIndex,
 };
-use super::{overlay, Params};
+use super::overlay::{self, Given};
+use super::Params;
 use geo::orient::{Direction, Orient};
 use geo::{
     Area, BoundingRect, Centroid, Contains, Coord, Intersects, LineString, MultiPolygon, Point,
@@ -66,11 +67,13 @@ pub struct Prepared {
     pub part_of: Vec<usize>,
 }
 
-/// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area);
+/// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area; `checked`
+/// says, per region, whether its validity was checked in these coordinates and held);
 /// `reached` hears the share of the work done as each costly stage begins (adjacency and union
 /// each about a third of it on dense boundaries, BENCHMARKS.md "Dense boundaries").
 pub fn prepare(
     regions: &[&MultiPolygon<f64>],
+    checked: &[bool],
     params: &Params,
     reached: &dyn Fn(f64, &str),
 ) -> Prepared {
@@ -84,7 +87,7 @@ pub fn prepare(
     reached(0.05, "outline: adjacency");
     let adjacency = adjacency(regions, &clusters, params.point_adjacency);
     reached(0.4, "outline: union");
-    let regions_union = merge(regions, &clusters);
+    let regions_union = merge(regions, checked, &clusters);
     reached(0.8, "outline: simplifying");
     let landmass_of = landmasses(regions, &regions_union, &centroids);
     let union = clean(regions_union.clone(), &centroids);
@@ -427,7 +430,11 @@ fn clusters(regions: &[&MultiPolygon<f64>]) -> Vec<Vec<usize>> {
 /// the parts, so both follow from the geometry alone. geo's union reads the winding of the first
 /// ring as the rule for all, and layers in the wild mix windings (Shapefile rings run
 /// clockwise), so every polygon is oriented first.
-fn merge(regions: &[&MultiPolygon<f64>], clusters: &[Vec<usize>]) -> MultiPolygon<f64> {
+fn merge(
+    regions: &[&MultiPolygon<f64>],
+    checked: &[bool],
+    clusters: &[Vec<usize>],
+) -> MultiPolygon<f64> {
     let parts: Vec<Vec<Polygon<f64>>> = clusters
         .par_iter()
         .map(|group| {
@@ -435,7 +442,12 @@ fn merge(regions: &[&MultiPolygon<f64>], clusters: &[Vec<usize>]) -> MultiPolygo
                 .flat_map(|&k| regions[k].0.iter())
                 .map(|p| p.orient(Direction::Default))
                 .collect();
-            overlay::union(&oriented, group.len() == 1)
+            let given = match group[..] {
+                [k] if checked[k] => Given::ValidRegion,
+                [_] => Given::Region,
+                _ => Given::Regions,
+            };
+            overlay::union(&oriented, given)
         })
         .collect();
     let lowest = |p: &Polygon<f64>| {
@@ -844,7 +856,12 @@ mod tests {
             .flat_map(|r| (0..3).map(move |c| square(c as f64, r as f64)))
             .collect();
         let refs: Vec<&MultiPolygon<f64>> = regions.iter().collect();
-        let prepared = prepare(&refs, &Params::default(), &|_, _| ());
+        let prepared = prepare(
+            &refs,
+            &vec![false; refs.len()],
+            &Params::default(),
+            &|_, _| (),
+        );
         // 3×3 rook adjacency: 12 pairs; diagonal neighbours touch at a point only.
         assert_eq!(prepared.adjacency.len(), 12);
         assert!(prepared.adjacency.contains(&(0, 1)));
@@ -856,7 +873,12 @@ mod tests {
             point_adjacency: true,
             ..Params::default()
         };
-        assert_eq!(prepare(&refs, &with_points, &|_, _| ()).adjacency.len(), 20);
+        assert_eq!(
+            prepare(&refs, &vec![false; refs.len()], &with_points, &|_, _| ())
+                .adjacency
+                .len(),
+            20
+        );
     }
 
     #[test]
@@ -891,7 +913,12 @@ mod tests {
             use geo::Scale;
             p.scale(0.01)
         }));
-        let prepared = prepare(&[&holed, &island], &Params::default(), &|_, _| ());
+        let prepared = prepare(
+            &[&holed, &island],
+            &[false, false],
+            &Params::default(),
+            &|_, _| (),
+        );
         let holes: Vec<&Ring> = prepared.rings.iter().filter(|r| r.hole).collect();
         assert_eq!(holes.len(), 1, "the 1-cell² lake stays, the sliver goes");
         // The island region's centroid lies in its big square; the tiny part holds no centroid.

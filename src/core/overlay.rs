@@ -18,12 +18,28 @@ use geo::{Coord, LineString, MultiPolygon, Polygon};
 use i_float::adapter::FloatPointAdapter;
 use i_float::int::point::IntPoint;
 
-/// The union of `polygons` (oriented: shells counter-clockwise, holes clockwise). With `alone`,
-/// they are the polygons of one region, whose union is themselves if they are valid here: the
-/// rounding into the unit-cell frame can break a valid region (subnormal coordinates, found by
-/// fuzzing), which the overlay then mends.
-pub fn union(polygons: &[Polygon<f64>], alone: bool) -> Vec<Polygon<f64>> {
-    if !alone || validity::problem(&MultiPolygon(polygons.to_vec())).is_some() {
+/// What [`union`] is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Given {
+    /// The polygons of several regions: overlaid.
+    Regions,
+    /// The polygons of one region, not known to be valid in these coordinates: checked, since
+    /// the rounding into the unit-cell frame can break a valid region (subnormal coordinates,
+    /// found by fuzzing), which the overlay then mends.
+    Region,
+    /// The polygons of one region, checked valid in these very coordinates.
+    ValidRegion,
+}
+
+/// The union of `polygons` (oriented: shells counter-clockwise, holes clockwise): for one valid
+/// region, the polygons themselves.
+pub fn union(polygons: &[Polygon<f64>], given: Given) -> Vec<Polygon<f64>> {
+    let valid = match given {
+        Given::Regions => false,
+        Given::Region => validity::problem(&MultiPolygon(polygons.to_vec())).is_none(),
+        Given::ValidRegion => true,
+    };
+    if !valid {
         return geo::unary_union(polygons).0;
     }
     let points: Vec<[f64; 2]> = rings(polygons)
@@ -156,7 +172,7 @@ mod tests {
             .map(|p| p.orient(Direction::Default))
             .collect();
         (
-            by_lowest(union(&oriented, true)),
+            by_lowest(union(&oriented, Given::Region)),
             by_lowest(geo::unary_union(&oriented).0),
         )
     }
