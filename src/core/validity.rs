@@ -149,7 +149,7 @@ fn sweep(index: &Runs, rings: &[Vec<Coord<f64>>]) -> Option<Problem> {
     events.sort_unstable_by(|(p, e), (q, f)| {
         (p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y))).then(e.cmp(f))
     });
-    let starts = |e: &(Coord<f64>, usize)| e.1 % 2 == 0;
+    let starts = |e: &(Coord<f64>, usize)| e.1.is_multiple_of(2);
     let segment = |e: &(Coord<f64>, usize)| segments[e.1 / 2];
     let mut order: BTreeSet<Key> = BTreeSet::new();
     let check = |u: &Swept, v: &Swept| {
