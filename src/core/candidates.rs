@@ -21,7 +21,9 @@ use super::{
     assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params, Progress,
     Region, RegionCell, RegionMetrics,
 };
-use geo::{Area, Centroid, Coord, CoordsIter, HasDimensions, MakeValid, MultiPolygon};
+use geo::{
+    Area, Centroid, Coord, CoordsIter, HasDimensions, LineString, MakeValid, MultiPolygon, Polygon,
+};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -605,12 +607,12 @@ fn repaired(region: &Region) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Probl
         }
         return Ok((Cow::Borrowed(&region.geometry), None));
     };
-    let repaired = region.geometry.make_valid().map_err(|e| {
+    let repaired = canonical(region.geometry.make_valid().map_err(|e| {
         Error::input(
             Some(id),
             format!("the polygon is invalid ({problem}) and cannot be repaired: {e}"),
         )
-    })?;
+    })?);
     if !has_area(&repaired) {
         return Err(Error::input(
             Some(id),
@@ -618,6 +620,47 @@ fn repaired(region: &Region) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Probl
         ));
     }
     Ok((Cow::Owned(repaired), Some(problem)))
+}
+
+/// `polygons` in one order whatever the order they came in: each ring starting at its lowest
+/// vertex (x, then y), holes and polygons in the order of their lowest vertices. geo's
+/// `MakeValid` traces the repaired rings from a hash set, so their start and order change from
+/// one call to the next, and with them the layer's summed area in its last bits, the cell size
+/// and every coordinate written.
+fn canonical(polygons: MultiPolygon<f64>) -> MultiPolygon<f64> {
+    let lowest = |ring: &LineString<f64>| {
+        let open = &ring.0[..ring.0.len().saturating_sub(1)];
+        (0..open.len())
+            .min_by(|&a, &b| {
+                (open[a].x.total_cmp(&open[b].x)).then(open[a].y.total_cmp(&open[b].y))
+            })
+            .map(|k| (k, open[k]))
+    };
+    let by_lowest = |a: &LineString<f64>, b: &LineString<f64>| {
+        let key = |r: &LineString<f64>| lowest(r).map(|(_, c)| (c.x, c.y));
+        match (key(a), key(b)) {
+            (Some(a), Some(b)) => a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)),
+            (a, b) => a.is_some().cmp(&b.is_some()),
+        }
+    };
+    let rotated = |ring: &LineString<f64>| {
+        let Some((k, _)) = lowest(ring) else {
+            return ring.clone();
+        };
+        let open = &ring.0[..ring.0.len() - 1];
+        let mut coords: Vec<Coord<f64>> = open[k..].iter().chain(&open[..k]).copied().collect();
+        coords.push(open[k]);
+        LineString(coords)
+    };
+    let mut polygons: Vec<Polygon<f64>> = (polygons.0.iter())
+        .map(|p| {
+            let mut holes: Vec<LineString<f64>> = p.interiors().iter().map(rotated).collect();
+            holes.sort_by(by_lowest);
+            Polygon::new(rotated(p.exterior()), holes)
+        })
+        .collect();
+    polygons.sort_by(|a, b| by_lowest(a.exterior(), b.exterior()));
+    MultiPolygon(polygons)
 }
 
 /// Written so that a NaN area counts as none.
@@ -1281,6 +1324,34 @@ impl Context<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_repair_comes_out_the_same_every_time() {
+        // A ring that crosses itself twice: repaired into three triangles, each traced from
+        // wherever geo's hash set starts.
+        let ring: Vec<(f64, f64)> = vec![
+            (0.0, 0.0),
+            (2.0, 1.0),
+            (4.0, 0.0),
+            (6.0, 1.0),
+            (6.0, 0.0),
+            (4.0, 1.0),
+            (2.0, 0.0),
+            (0.0, 1.0),
+        ];
+        let region = Region {
+            id: "zigzag".into(),
+            geometry: MultiPolygon(vec![Polygon::new(LineString::from(ring), vec![])]),
+            group: None,
+            pin: None,
+        };
+        let (first, problem) = repaired(&region).unwrap();
+        assert!(problem.is_some());
+        assert!(first.0.len() > 1, "{first:?}");
+        for _ in 0..20 {
+            assert_eq!(repaired(&region).unwrap().0, first);
+        }
+    }
 
     #[test]
     fn all_layouts_keep_the_order_of_the_parameters() {
