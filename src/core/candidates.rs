@@ -379,16 +379,26 @@ impl Input {
         let Checked {
             placed: Placed { order, frame, unit },
             valid_here,
+            drawn,
             notes,
         } = check(regions)?;
         let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
+        let drawn_refs: Vec<&MultiPolygon<f64>> = (unit.iter().zip(&drawn))
+            .map(|(repaired, drawn)| drawn.as_ref().unwrap_or(repaired))
+            .collect();
         if !progress(CHECKING_SHARE, "outline") {
             return Err(Error::Cancelled);
         }
         // A cancel during the outline is heard at the next question after it.
-        let prepared = outline::prepare(&unit_refs, &valid_here, params, &|share, stage| {
-            progress(CHECKING_SHARE + (1.0 - CHECKING_SHARE) * share, stage);
-        });
+        let prepared = outline::prepare(
+            &unit_refs,
+            &drawn_refs,
+            &valid_here,
+            params,
+            &|share, stage| {
+                progress(CHECKING_SHARE + (1.0 - CHECKING_SHARE) * share, stage);
+            },
+        );
         // The union and its outline are computed, not given: arithmetic at the edge of the
         // floating-point range (subnormal coordinates, found by fuzzing) can leave them empty
         // although every region has area, and every later step works on them.
@@ -469,10 +479,12 @@ impl Placed {
 }
 
 /// The regions placed for the method, whether each (in geometric order) was found valid in the
-/// unit-cell frame, and notes on the ones repaired.
+/// unit-cell frame, each repaired one as drawn (in the unit-cell frame), and notes on the ones
+/// repaired.
 struct Checked {
     placed: Placed,
     valid_here: Vec<bool>,
+    drawn: Vec<Option<MultiPolygon<f64>>>,
     notes: Vec<String>,
 }
 
@@ -544,23 +556,25 @@ fn check(regions: &[Region]) -> Result<Checked, Error> {
             ))
         })
         .collect();
-    let (placed, valid_here) = match placed {
-        Some(placed) if notes.is_empty() => {
-            let valid = placed.order.iter().map(|&i| valid_here[i]).collect();
-            (placed, valid)
-        }
-        _ => {
-            let geometries: Vec<Cow<MultiPolygon<f64>>> =
-                checked.into_iter().map(|(g, _)| g).collect();
-            (
-                Placed::of(regions, &geometries)?,
-                vec![false; regions.len()],
-            )
-        }
-    };
+    if let Some(placed) = placed.filter(|_| notes.is_empty()) {
+        let valid_here = placed.order.iter().map(|&i| valid_here[i]).collect();
+        return Ok(Checked {
+            drawn: vec![None; regions.len()],
+            placed,
+            valid_here,
+            notes,
+        });
+    }
+    let was_repaired: Vec<bool> = checked.iter().map(|(_, p)| p.is_some()).collect();
+    let geometries: Vec<Cow<MultiPolygon<f64>>> = checked.into_iter().map(|(g, _)| g).collect();
+    let placed = Placed::of(regions, &geometries)?;
+    let drawn = (placed.order.iter())
+        .map(|&i| was_repaired[i].then(|| placed.frame.polygons_to_unit(&regions[i].geometry)))
+        .collect();
     Ok(Checked {
+        valid_here: vec![false; regions.len()],
+        drawn,
         placed,
-        valid_here,
         notes,
     })
 }
@@ -1324,6 +1338,42 @@ impl Context<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_repaired_region_keeps_the_neighbour_its_dropped_spike_ran_along() {
+        // A's only border with B is a spike out along B's bottom edge and back: a repair drops
+        // the spike (it has no area), which leaves A and B meeting at a corner. As drawn, they
+        // share a border of length 1, and the judge counts them adjacent.
+        let polygon = |ring: Vec<(f64, f64)>| {
+            MultiPolygon(vec![Polygon::new(LineString::from(ring), vec![])])
+        };
+        let region = |id: &str, geometry| Region {
+            id: id.into(),
+            geometry,
+            group: None,
+            pin: None,
+        };
+        let spiked = polygon(vec![
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 0.5),
+            (2.0, 0.5),
+            (1.0, 0.5),
+            (0.0, 0.5),
+        ]);
+        let beside = polygon(vec![(1.0, 0.5), (2.0, 0.5), (2.0, 1.5), (1.0, 1.5)]);
+        let map = generate(
+            &[region("a", spiked), region("b", beside)],
+            &Params::default(),
+            &|_, _| true,
+        )
+        .unwrap();
+        assert!(map
+            .notes
+            .iter()
+            .any(|n| n.contains("feature a: invalid polygon repaired")));
+        assert_eq!(map.adjacency, vec![(0, 1)]);
+    }
 
     #[test]
     fn a_repair_comes_out_the_same_every_time() {

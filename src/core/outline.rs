@@ -68,11 +68,16 @@ pub struct Prepared {
 }
 
 /// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area; `checked`
-/// says, per region, whether its validity was checked in these coordinates and held);
+/// says, per region, whether its validity was checked in these coordinates and held). `drawn`
+/// is each region as drawn, before any repair, whose boundary gives its neighbours: the judge
+/// (method.md §8) and the user read adjacency off the boundaries as drawn, and a repair can drop
+/// a sliver of no area that runs along a neighbour (an out-and-back stretch of border whose two
+/// sides cross), and with it the shared border;
 /// `reached` hears the share of the work done as each costly stage begins (adjacency and union
 /// each about a third of it on dense boundaries, BENCHMARKS.md "Dense boundaries").
 pub fn prepare(
     regions: &[&MultiPolygon<f64>],
+    drawn: &[&MultiPolygon<f64>],
     checked: &[bool],
     params: &Params,
     reached: &dyn Fn(f64, &str),
@@ -83,9 +88,10 @@ pub fn prepare(
         .zip(&centroids)
         .map(|(r, &fallback)| r.centroid().map_or(fallback, |p| p.0))
         .collect();
-    let clusters = clusters(regions);
+    // A repair stays within the box of the region as drawn: the drawn boxes group both.
+    let clusters = clusters(drawn);
     reached(0.05, "outline: adjacency");
-    let adjacency = adjacency(regions, &clusters, params.point_adjacency);
+    let adjacency = adjacency(drawn, &clusters, params.point_adjacency);
     reached(0.4, "outline: union");
     let regions_union = merge(regions, checked, &clusters);
     reached(0.8, "outline: simplifying");
@@ -911,6 +917,7 @@ mod tests {
         let refs: Vec<&MultiPolygon<f64>> = regions.iter().collect();
         let prepared = prepare(
             &refs,
+            &refs,
             &vec![false; refs.len()],
             &Params::default(),
             &|_, _| (),
@@ -927,9 +934,15 @@ mod tests {
             ..Params::default()
         };
         assert_eq!(
-            prepare(&refs, &vec![false; refs.len()], &with_points, &|_, _| ())
-                .adjacency
-                .len(),
+            prepare(
+                &refs,
+                &refs,
+                &vec![false; refs.len()],
+                &with_points,
+                &|_, _| ()
+            )
+            .adjacency
+            .len(),
             20
         );
     }
@@ -967,6 +980,7 @@ mod tests {
             p.scale(0.01)
         }));
         let prepared = prepare(
+            &[&holed, &island],
             &[&holed, &island],
             &[false, false],
             &Params::default(),
