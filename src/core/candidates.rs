@@ -18,8 +18,8 @@ use super::snake::{self, SnakeRun};
 use super::tiling::{Position, Tiling};
 use super::validity::{self, Problem};
 use super::{
-    assign, forces, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params, Progress,
-    Region, RegionCell, RegionMetrics,
+    assign, forces, geometry, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params,
+    Progress, Region, RegionCell, RegionMetrics,
 };
 use geo::{
     Area, Centroid, Coord, CoordsIter, HasDimensions, LineString, MakeValid, MultiPolygon, Polygon,
@@ -642,38 +642,26 @@ fn repaired(region: &Region) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Probl
 /// one call to the next, and with them the layer's summed area in its last bits, the cell size
 /// and every coordinate written.
 fn canonical(polygons: MultiPolygon<f64>) -> MultiPolygon<f64> {
-    let lowest = |ring: &LineString<f64>| {
-        let open = &ring.0[..ring.0.len().saturating_sub(1)];
-        (0..open.len())
-            .min_by(|&a, &b| {
-                (open[a].x.total_cmp(&open[b].x)).then(open[a].y.total_cmp(&open[b].y))
-            })
-            .map(|k| (k, open[k]))
-    };
-    let by_lowest = |a: &LineString<f64>, b: &LineString<f64>| {
-        let key = |r: &LineString<f64>| lowest(r).map(|(_, c)| (c.x, c.y));
-        match (key(a), key(b)) {
-            (Some(a), Some(b)) => a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)),
-            (a, b) => a.is_some().cmp(&b.is_some()),
-        }
-    };
+    // The lowest vertex then comes first, and orders the rings.
     let rotated = |ring: &LineString<f64>| {
-        let Some((k, _)) = lowest(ring) else {
+        let open = &ring.0[..ring.0.len().saturating_sub(1)];
+        let Some(k) = geometry::lowest(open) else {
             return ring.clone();
         };
-        let open = &ring.0[..ring.0.len() - 1];
-        let mut coords: Vec<Coord<f64>> = open[k..].iter().chain(&open[..k]).copied().collect();
-        coords.push(open[k]);
-        LineString(coords)
+        LineString(open[k..].iter().chain(&open[..=k]).copied().collect())
+    };
+    let by_first = |a: &LineString<f64>, b: &LineString<f64>| match (a.0.first(), b.0.first()) {
+        (Some(p), Some(q)) => p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)),
+        (p, q) => p.is_some().cmp(&q.is_some()),
     };
     let mut polygons: Vec<Polygon<f64>> = (polygons.0.iter())
         .map(|p| {
             let mut holes: Vec<LineString<f64>> = p.interiors().iter().map(rotated).collect();
-            holes.sort_by(by_lowest);
+            holes.sort_by(by_first);
             Polygon::new(rotated(p.exterior()), holes)
         })
         .collect();
-    polygons.sort_by(|a, b| by_lowest(a.exterior(), b.exterior()));
+    polygons.sort_by(|a, b| by_first(a.exterior(), b.exterior()));
     MultiPolygon(polygons)
 }
 

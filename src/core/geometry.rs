@@ -48,6 +48,13 @@ pub fn bounds(rects: impl Iterator<Item = Rect<f64>>) -> Option<Rect<f64>> {
     })
 }
 
+/// The index of the lowest of `coords`: least x, then least y (the first of equals).
+pub fn lowest(coords: &[Coord<f64>]) -> Option<usize> {
+    (0..coords.len()).min_by(|&a, &b| {
+        (coords[a].x.total_cmp(&coords[b].x)).then(coords[a].y.total_cmp(&coords[b].y))
+    })
+}
+
 /// Squared distance from `p` to the segment `a`–`b`.
 pub fn point_segment_distance2(p: Coord<f64>, a: Coord<f64>, b: Coord<f64>) -> f64 {
     let ab = b - a;

@@ -3,7 +3,7 @@
 //! two vertices per region.
 
 use super::geometry::{
-    interior_point, interior_point_of_all, nearest_on_segment, point_segment_distance2,
+    interior_point, interior_point_of_all, lowest, nearest_on_segment, point_segment_distance2,
     segments_intersect, RingIndex,
 };
 use super::overlay::{self, Given};
@@ -67,7 +67,7 @@ pub struct Prepared {
     pub part_of: Vec<usize>,
 }
 
-/// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area; `checked`
+/// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area; `valid_here`
 /// says, per region, whether its validity was checked in these coordinates and held). `drawn`
 /// is each region as drawn, before any repair, whose boundary gives its neighbours: the judge
 /// (method.md §8) and the user read adjacency off the boundaries as drawn, and a repair can drop
@@ -78,7 +78,7 @@ pub struct Prepared {
 pub fn prepare(
     regions: &[&MultiPolygon<f64>],
     drawn: &[&MultiPolygon<f64>],
-    checked: &[bool],
+    valid_here: &[bool],
     params: &Params,
     reached: &dyn Fn(f64, &str),
 ) -> Prepared {
@@ -93,7 +93,7 @@ pub fn prepare(
     reached(0.05, "outline: adjacency");
     let adjacency = adjacency(drawn, &clusters, params.point_adjacency);
     reached(0.4, "outline: union");
-    let regions_union = merge(regions, checked, &clusters);
+    let regions_union = merge(regions, valid_here, &clusters);
     reached(0.8, "outline: simplifying");
     let landmass_of = landmasses(regions, &regions_union, &centroids);
     let union = clean(regions_union.clone(), &centroids);
@@ -438,7 +438,7 @@ fn clusters(regions: &[&MultiPolygon<f64>]) -> Vec<Vec<usize>> {
 /// clockwise), so every polygon is oriented first.
 fn merge(
     regions: &[&MultiPolygon<f64>],
-    checked: &[bool],
+    valid_here: &[bool],
     clusters: &[Vec<usize>],
 ) -> MultiPolygon<f64> {
     let parts: Vec<Vec<Polygon<f64>>> = clusters
@@ -449,7 +449,7 @@ fn merge(
                 .map(|p| p.orient(Direction::Default))
                 .collect();
             let given = match group[..] {
-                [k] if checked[k] => Given::ValidRegion,
+                [k] if valid_here[k] => Given::ValidRegion,
                 [_] => Given::Region,
                 _ => Given::Regions,
             };
@@ -457,18 +457,13 @@ fn merge(
         })
         .collect();
     let lowest = |p: &Polygon<f64>| {
-        (p.exterior().0.iter()).fold(
+        let ring = &p.exterior().0;
+        lowest(ring).map_or(
             Coord {
                 x: f64::INFINITY,
                 y: f64::INFINITY,
             },
-            |a, &c| {
-                if (c.x, c.y) < (a.x, a.y) {
-                    c
-                } else {
-                    a
-                }
-            },
+            |k| ring[k],
         )
     };
     let mut parts: Vec<(Coord<f64>, Polygon<f64>)> = (parts.into_iter().flatten())
