@@ -289,8 +289,10 @@ pub struct Homes<'a> {
 ///
 /// A block takes, among the shifts that keep it off every other part's cells and add no hole
 /// to the layout, the one putting the fewest of its regions on another landmass, then the one of
-/// least refinement energy (method.md §6b): the regions' squared distances from their places
-/// under the §8 fit of the whole layout as the shift leaves it (in fitted cells), plus the
+/// least energy as method.md §6b writes it: the regions' squared distances from their places
+/// under the §8 fit of the whole layout as the shift leaves it (in fitted cells; squared
+/// throughout, unlike the refinement's beyond `refine_location_knee`, since the fit's sums
+/// give the square's total for every shift in O(1)), plus the
 /// block's pairs with other blocks; then the lowest row and column shift. It moves only if that
 /// is better than staying. The part with the most regions stays (the lowest index among
 /// equals); the others go largest first. A block's assignment stays optimal: translating all

@@ -73,6 +73,7 @@ pub struct Params {
     pub refine_w_angle: f64,
     pub refine_w_misdirected: f64,
     pub refine_w_location: f64,
+    pub refine_location_knee: f64,
     pub refine_w_landmass: f64,
     pub refine_w_notch: f64,
     pub refine_cell_ratio: f64,
@@ -116,6 +117,10 @@ impl Default for Params {
             refine_w_angle: 1.0,
             refine_w_misdirected: 0.5,
             refine_w_location: 0.25,
+            // Linear beyond a cell, as §8 measures location: the square pulled the regions of a
+            // layer of uneven density (us_counties) towards their far places, out of the
+            // lattice's interior, and left inlets a cell wide (BENCHMARKS.md, "Location cost").
+            refine_location_knee: 1.0,
             refine_w_landmass: 2.0,
             refine_w_notch: 1.0,
             refine_cell_ratio: 1.3,
@@ -889,8 +894,24 @@ pub static PARAMETERS: &[Parameter] = &[
         group: Group::Refinement,
         advanced: true,
         summary: "Refinement weight: distance",
-        help: "Cost of a region's squared distance from its moved centroid, per cell².",
+        help: "Cost of a region's distance d from its place, in cells: d² up to \
+             refine_location_knee, then growing linearly (see there).",
         access: accessors!(refine_w_location, Real),
+    },
+    Parameter {
+        name: "refine_location_knee",
+        kind: Kind::Real,
+        optional: false,
+        min: closed(0.1),
+        max: closed(1000.0),
+        unit: "cells",
+        group: Group::Refinement,
+        advanced: true,
+        summary: "Refinement: distance cost linear beyond",
+        help: "Beyond this distance k from its place a region's distance cost grows linearly, \
+             k·(2d − k), as method.md §8 measures location, instead of with the square d²; \
+             1000 gives method.md §6b's squared cost everywhere.",
+        access: accessors!(refine_location_knee, Real),
     },
     Parameter {
         name: "refine_w_landmass",

@@ -508,8 +508,12 @@ impl Links {
 struct Problem<'a> {
     layout: &'a Layout<'a>,
     pairs: PairWeights,
-    /// `refine_w_location` per S'², so that distances count in cells.
+    /// `refine_w_location`, on distances in cells ([`Problem::placement`]).
     w_location: f64,
+    /// `refine_location_knee`, in cells.
+    location_knee: f64,
+    /// S', the lattice's cell size, which makes distances count in cells.
+    cell_size: f64,
     w_landmass: f64,
     w_notch: f64,
     links: &'a [(usize, Coord<f64>)],
@@ -524,7 +528,9 @@ impl<'a> Problem<'a> {
         Problem {
             layout,
             pairs: PairWeights::of(params),
-            w_location: params.refine_w_location / layout.lattice.cell_size.powi(2),
+            w_location: params.refine_w_location,
+            location_knee: params.refine_location_knee,
+            cell_size: layout.lattice.cell_size,
             w_landmass: params.refine_w_landmass,
             w_notch: params.refine_w_notch,
             links: &links.links,
@@ -566,8 +572,17 @@ impl<'a> Problem<'a> {
                 .entry((region, position))
                 .or_insert_with(|| misplaced(region, position))
         });
-        self.w_location * (offset.x * offset.x + offset.y * offset.y)
-            + if misplaced { self.w_landmass } else { 0.0 }
+        // The squared distance in cells, and beyond the knee the tangent line of the square,
+        // which grows with the distance itself (a Huber cost).
+        let squared =
+            (offset.x * offset.x + offset.y * offset.y) / (self.cell_size * self.cell_size);
+        let knee = self.location_knee;
+        let distance_cost = if squared <= knee * knee {
+            squared
+        } else {
+            knee * (2.0 * squared.sqrt() - knee)
+        };
+        self.w_location * distance_cost + if misplaced { self.w_landmass } else { 0.0 }
     }
 
     /// The whole energy of the assignment `at`.
@@ -1151,6 +1166,37 @@ mod tests {
         assert!((pair(at(-2, 0)) - 3.5).abs() < 1e-12);
         // The same pair seen from the other side.
         assert_eq!(problem.pair(-east, at(-2, 0), at(0, 0)), pair(at(-2, 0)));
+    }
+
+    #[test]
+    fn the_distance_cost_is_squared_within_the_knee_and_linear_beyond() {
+        // Region 0 belongs at cell (0, 0); cells are 1 apart (hand-computed costs).
+        let map = Map::new(4, 4, 0);
+        let layout = map.layout();
+        let links = Links::of(&layout);
+        let cost = |knee: f64, col: i32, row: i32| {
+            let params = Params {
+                refine_location_knee: knee,
+                ..Params::default()
+            };
+            let problem = Problem::new(&layout, &params, &links);
+            let cell = LatticeCell {
+                col,
+                row,
+                score: 2.0,
+                part: 0,
+            };
+            problem.placement(0, cell) / params.refine_w_location
+        };
+        assert_eq!(cost(1.0, 0, 0), 0.0);
+        // Up to the knee, the square; both forms meet there.
+        assert!((cost(1.0, 1, 0) - 1.0).abs() < 1e-12);
+        assert!((cost(2.0, 1, 1) - 2.0).abs() < 1e-12);
+        // Beyond it, k·(2d − k): 3 cells away, 5 with a knee of 1 (9 squared), 8 with 2.
+        assert!((cost(1.0, 3, 0) - 5.0).abs() < 1e-12);
+        assert!((cost(2.0, 3, 0) - 8.0).abs() < 1e-12);
+        assert!((cost(1000.0, 3, 0) - 9.0).abs() < 1e-12);
+        assert!((cost(1.0, 1, 1) - (2.0 * 2f64.sqrt() - 1.0)).abs() < 1e-12);
     }
 
     #[test]
