@@ -15,7 +15,7 @@ hold; BENCHMARKS.md "Settings tried over seeds" has the sweeps so far).
     --a, --b   snakegrid options as one string, e.g. --b "-refine_temperature 1.5"
     --both     options for both runs, e.g. --both "-cell hex"
 
-About 20 s per seed and setting on 2 cores. Needs a release build, and Python 3 with shapely,
+About 9 s per seed and setting on 2 cores (34 s for 2 seeds of A and B). Needs a release build, and Python 3 with shapely,
 numpy, pyogrio and pyproj (the judge's and make-test-layers.py's needs).
 """
 
@@ -67,6 +67,10 @@ def judged(source, options, seed, grid):
     return json.loads(out)
 
 
+def mean(xs):
+    return sum(xs) / len(xs)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seeds", type=int, default=4)
@@ -105,7 +109,6 @@ def main():
     for (name, which, _, _), result in zip(jobs, results):
         for key, _, _ in METRICS:
             means.setdefault((name, which, key), []).append(float(result[key]))
-    mean = lambda xs: sum(xs) / len(xs)
     print(f"A: {settings['A'].strip() or 'the defaults'}; B: {settings['B'].strip()}; "
           f"seeds 0-{args.seeds - 1}; B − A, per layer (positive: B better)")
     print("| layer | " + " | ".join(label for _, label, _ in METRICS) + " |")

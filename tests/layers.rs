@@ -495,8 +495,9 @@ fn densified_boundaries_give_the_same_neighbours_and_a_layout_as_good() {
         if name != "us_states" {
             continue;
         }
-        let seeds: Vec<_> = (0..8)
-            .map(|seed| {
+        // Seed 0 is the default's, already run.
+        let seeds: Vec<_> = std::iter::once(plain.metrics)
+            .chain((1..8).map(|seed| {
                 run(
                     &regions,
                     &Params {
@@ -505,7 +506,7 @@ fn densified_boundaries_give_the_same_neighbours_and_a_layout_as_good() {
                     },
                 )
                 .metrics
-            })
+            }))
             .collect();
         let b = thick.metrics;
         for (metric, of, margin) in [

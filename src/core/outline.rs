@@ -456,7 +456,7 @@ fn merge(
             overlay::union(&oriented, given)
         })
         .collect();
-    let lowest = |p: &Polygon<f64>| {
+    let lowest_vertex = |p: &Polygon<f64>| {
         let ring = &p.exterior().0;
         lowest(ring).map_or(
             Coord {
@@ -467,7 +467,7 @@ fn merge(
         )
     };
     let mut parts: Vec<(Coord<f64>, Polygon<f64>)> = (parts.into_iter().flatten())
-        .map(|p| (lowest(&p), p))
+        .map(|p| (lowest_vertex(&p), p))
         .collect();
     parts.sort_by(|(p, _), (q, _)| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
     MultiPolygon(parts.into_iter().map(|(_, p)| p).collect())

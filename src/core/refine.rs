@@ -512,8 +512,6 @@ struct Problem<'a> {
     w_location: f64,
     /// `refine_location_knee`, in cells.
     location_knee: f64,
-    /// S', the lattice's cell size, which makes distances count in cells.
-    cell_size: f64,
     w_landmass: f64,
     w_notch: f64,
     links: &'a [(usize, Coord<f64>)],
@@ -530,7 +528,6 @@ impl<'a> Problem<'a> {
             pairs: PairWeights::of(params),
             w_location: params.refine_w_location,
             location_knee: params.refine_location_knee,
-            cell_size: layout.lattice.cell_size,
             w_landmass: params.refine_w_landmass,
             w_notch: params.refine_w_notch,
             links: &links.links,
@@ -574,8 +571,8 @@ impl<'a> Problem<'a> {
         });
         // The squared distance in cells, and beyond the knee the tangent line of the square,
         // which grows with the distance itself (a Huber cost).
-        let squared =
-            (offset.x * offset.x + offset.y * offset.y) / (self.cell_size * self.cell_size);
+        let size = self.layout.lattice.cell_size;
+        let squared = (offset.x * offset.x + offset.y * offset.y) / (size * size);
         let knee = self.location_knee;
         let distance_cost = if squared <= knee * knee {
             squared
