@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Quality of the layouts, measured by the shared judge (../shared/eval/gridmap_eval.py, the
 # reference implementation of method.md §8), on every shared layer and on generated ones (random
-# Voronoi layers, islands, a river-like gap, an archipelago; scripts/make-test-layers.py), through the command
+# Voronoi layers, islands, a river-like gap, an archipelago, a thin country; scripts/make-test-layers.py), through the command
 # line with the defaults, with -refine false, in hexagons and (us_counties) grouped by state;
 # writes QUALITY.md with every metric in one
 # table and the reference figures of other tools beside them. Re-run it before any stop that
@@ -29,12 +29,14 @@ make river 300 4 "$work/river.gpkg"
 # a city's 33 districts on the two banks of a river a tenth of a district wide
 make river 33 6 "$work/river_33.gpkg"
 make archipelago 3000 300 5 "$work/archipelago.gpkg"
+# a long thin country of 40 regions, 0.7 cells wide
+make strip 40 9 "$work/strip.gpkg"
 layers=(
     "$data/us_states.gpkg" "$data/nc_counties.gpkg" "$data/virginia_counties.gpkg"
     "$data/world_countries.gpkg" "$data/us_counties.gpkg"
     "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
     "$work/river_33.gpkg"
-    "$work/archipelago.gpkg"
+    "$work/archipelago.gpkg" "$work/strip.gpkg"
 )
 
 rows="$work/rows.tsv"
@@ -118,8 +120,8 @@ markdown_rows() {
     echo "8-neighbourhood is the six edge neighbours, so adj 8 and adj 4 agree. The generated layers come"
     echo "from \`scripts/make-test-layers.py\`: random Voronoi cells of 300 and 3,000 regions, three"
     echo "far-apart landmasses with islands (\`islands\`), Voronoi cells cut by a winding river gap"
-    echo "(\`river\`), and a mainland of 3,000 Voronoi cells ringed by 300 one-region islands"
-    echo "(\`archipelago\`)."
+    echo "(\`river\`), a mainland of 3,000 Voronoi cells ringed by 300 one-region islands"
+    echo "(\`archipelago\`), and a long thin country of 40 Voronoi cells 0.7 cells wide (\`strip\`)."
     echo
     echo "Columns: C_adjacent in the 8-neighbourhood and the 4-neighbourhood (shared edge), the"
     echo "false-neighbour share, C_orientation (degrees) and the misdirected share (> 45°),"

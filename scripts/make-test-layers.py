@@ -10,6 +10,9 @@
                                                     one-region islands scattered round it
     make-test-layers.py river N SEED OUT.gpkg       Voronoi cells cut by a river-like gap, the
                                                     outline's two banks close together
+    make-test-layers.py strip N SEED OUT.gpkg       a long thin country (Chile, Norway, Vietnam):
+                                                    Voronoi cells of a tilted strip 0.7 cells
+                                                    wide, N regions
     make-test-layers.py densify SRC VERTICES OUT.gpkg
                                                     SRC with every edge subdivided, to about
                                                     VERTICES vertices in all, with a small wiggle
@@ -30,6 +33,7 @@ import sys
 import numpy as np
 import pyogrio.raw
 import shapely
+import shapely.affinity
 
 SIDE = 1_000_000.0  # metres: the square the generated layers fill
 
@@ -151,6 +155,17 @@ def river(n, seed):
     return [f"r{k}" for k in range(n)], pieces
 
 
+def strip(n, seed):
+    """Voronoi cells of a strip tilted 15 degrees, SIDE long and SIDE / (2n) wide: a cell of the
+    layout (area / n) has sides of 0.71 SIDE / n, so the strip is 0.7 cells wide. Convex, so
+    every clipped cell is one piece."""
+    rng = np.random.default_rng(seed)
+    width = SIDE / (2 * n)
+    land = shapely.affinity.rotate(shapely.box(-width / 2, 0, width / 2, SIDE), 15, origin=(0, 0))
+    cells = voronoi_tiles(random_points(rng, n, land), land)
+    return [f"s{k}" for k in range(n)], cells
+
+
 def wiggled(a, b, pieces):
     """The points between `a` and `b` (exclusive) on a wiggle that depends only on the segment,
     not on its direction: both regions beside a shared edge get the same vertices."""
@@ -229,6 +244,9 @@ def main(argv):
         write(args[3], ids, geometries)
     elif kind == "river":
         ids, geometries = river(int(args[0]), int(args[1]))
+        write(args[2], ids, geometries)
+    elif kind == "strip":
+        ids, geometries = strip(int(args[0]), int(args[1]))
         write(args[2], ids, geometries)
     elif kind == "densify":
         ids, geometries, crs = densify(args[0], int(float(args[1])))

@@ -5,7 +5,7 @@
 
 use geo::{Area, Coord, LineString, MultiPolygon, Polygon};
 use proptest::prelude::*;
-use snakegrid::params::{Kind, Parameter};
+use snakegrid::params::{CellShape, HexOrientation, Kind, Parameter};
 use snakegrid::{generate, GridMap, Params, Region, PARAMETERS};
 use std::collections::HashMap;
 
@@ -380,5 +380,71 @@ fn a_river_narrower_than_a_cell_puts_no_district_on_the_wrong_bank() {
             map.metrics
         );
         assert_eq!(map.metrics.holes, 0, "{columns}×{bands}");
+    }
+}
+
+/// A long thin country (Chile, Norway, Vietnam) of `count` regions: a strip tilted 15° and 0.7
+/// cells wide (`count` cells of area 0.49 in a strip 0.49 wide and `count` long), cut across
+/// at uneven places and slants.
+fn thin_country(count: usize) -> Vec<Region> {
+    let width = 0.49;
+    let (along, across) = {
+        let a = 15f64.to_radians();
+        (
+            Coord {
+                x: a.sin(),
+                y: a.cos(),
+            },
+            Coord {
+                x: a.cos(),
+                y: -a.sin(),
+            },
+        )
+    };
+    let at = |t: f64, s: f64| along * t + across * s;
+    let cut = |j: usize| {
+        let j = j as f64;
+        let (t, slant) = (j + 0.25 * (1.7 * j).sin(), 0.15 * (1.3 * j).cos());
+        (at(t + slant, 0.0), at(t - slant, width))
+    };
+    (0..count)
+        .map(|j| {
+            let ((a, b), (c, d)) = (cut(j), cut(j + 1));
+            Region {
+                id: format!("t{j}"),
+                geometry: MultiPolygon(vec![Polygon::new(LineString(vec![a, b, d, c, a]), vec![])]),
+                group: None,
+                pin: None,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn a_country_thinner_than_a_cell_stays_one_piece() {
+    // No cell lies wholly inside the strip, and the best-covered cells alone alternate with
+    // worse ones along it: before the flood (landmass::select) the generated strip layer of
+    // scripts/make-test-layers.py came out in 14 pieces with squares and 7 with hexagons.
+    for (cell, orientation) in [
+        (CellShape::Square, HexOrientation::Pointy),
+        (CellShape::Hex, HexOrientation::Pointy),
+        (CellShape::Hex, HexOrientation::Flat),
+    ] {
+        let regions = thin_country(40);
+        let params = Params {
+            cell,
+            hex_orientation: orientation,
+            ..Params::default()
+        };
+        let map = run(&regions, &params);
+        common::assert_valid_grid(&regions, &map);
+        let m = map.metrics;
+        assert_eq!(
+            (m.pieces, m.holes),
+            (1, 0),
+            "{cell:?} {orientation:?}: {m:?}"
+        );
+        // A chain of 39 neighbour pairs in one piece: at most a few bends lose a pair.
+        assert!(m.adjacent >= 0.9, "{cell:?} {orientation:?}: {m:?}");
     }
 }

@@ -4,9 +4,10 @@
 //! crowded one (Europe) needs, and no region crosses an ocean.
 //!
 //! Cells are handed out best score first over all parts together, each cell to the part that
-//! covers it best, until every part has its k; a part whose outline covers fewer than k cells
-//! (a small landmass of many regions, a tiny island) then takes the free positions nearest to its
-//! outline. The same rule, with `ratio`·k cells per part, gives the refinement its pool of free
+//! covers it best, until every part has its k; a cell not wholly inside waits until it joins
+//! its part's cells (a flood), so that a landmass thinner than a cell stays one block; a part
+//! whose outline covers fewer than k cells (a small landmass of many regions, a tiny island)
+//! then takes the free positions nearest to its outline. The same rule, with `ratio`·k cells per part, gives the refinement its pool of free
 //! cells, each tagged with its part: a region only ever moves within its own landmass.
 //!
 //! Once assigned, each part's block of cells is moved as a whole to where §8 measures its
@@ -75,8 +76,9 @@ pub fn select(
     }
 }
 
-/// Hands out `wanted[p]` more cells to each part `p`, free ones only: best scored first, then,
-/// for parts still short, the free positions nearest their outline.
+/// Hands out `wanted[p]` more cells to each part `p`, free ones only: best scored first (a part
+/// that this breaks into pieces flooded instead, where that joins them), then, for parts still
+/// short, the free positions nearest their outline.
 fn pick(
     lattice: &Lattice,
     parts: &[MultiPolygon<f64>],
@@ -85,20 +87,25 @@ fn pick(
     wanted: &[usize],
     taken: &mut FxHashMap<Position, usize>,
 ) -> Vec<LatticeCell> {
-    let mut missing = wanted.to_vec();
-    let mut chosen = Vec::with_capacity(wanted.iter().sum());
-    for cell in scored {
-        let at = (cell.col, cell.row);
-        // A cell sharing an edge with another landmass's would join the two into one piece:
-        // left for the search for free positions, which avoids that.
-        if missing[cell.part] > 0
-            && !taken.contains_key(&at)
-            && !touches_another(lattice, taken, at, cell.part)
-        {
-            taken.insert(at, cell.part);
-            missing[cell.part] -= 1;
-            chosen.push(*cell);
-        }
+    // Best first; then again, flooded, for the parts that best first breaks into pieces (a
+    // landmass is one piece of the outline, so its cells should be one block) and that the
+    // flood makes one piece. A part whose cells stay apart either way (two continents joined
+    // by an isthmus longer than the cells left for it) keeps the best cells.
+    let count = parts.len();
+    let mut best = taken.clone();
+    let (mut chosen, mut missing) = offer(lattice, scored, wanted, &mut best, &vec![false; count]);
+    let broken = broken_parts(lattice, &best, count);
+    let mut repaired = vec![false; count];
+    if broken.contains(&true) {
+        let mut flooded = taken.clone();
+        offer(lattice, scored, wanted, &mut flooded, &broken);
+        let still = broken_parts(lattice, &flooded, count);
+        repaired = (0..count).map(|p| broken[p] && !still[p]).collect();
+    }
+    if repaired.contains(&true) {
+        (chosen, missing) = offer(lattice, scored, wanted, taken, &repaired);
+    } else {
+        *taken = best;
     }
     if missing.iter().all(|&short| short == 0) {
         return chosen;
@@ -117,6 +124,142 @@ fn pick(
         }
     }
     chosen
+}
+
+/// Hands out `wanted[p]` more scored cells to each part `p`, best first, those of the
+/// `flooded` parts as their flood meets them ([`flood`]); returns the cells and how many
+/// each part still misses.
+fn offer(
+    lattice: &Lattice,
+    scored: &[LatticeCell],
+    wanted: &[usize],
+    taken: &mut FxHashMap<Position, usize>,
+    flooded: &[bool],
+) -> (Vec<LatticeCell>, Vec<usize>) {
+    let mut missing = wanted.to_vec();
+    let mut chosen = Vec::with_capacity(wanted.iter().sum());
+    // A cell sharing an edge with another landmass's would join the two into one piece: left
+    // for the search for free positions, which avoids that.
+    let mut take = |cell: &LatticeCell, taken: &mut FxHashMap<Position, usize>| {
+        let at = (cell.col, cell.row);
+        let free = missing[cell.part] > 0
+            && !taken.contains_key(&at)
+            && !touches_another(lattice, taken, at, cell.part);
+        if free {
+            taken.insert(at, cell.part);
+            missing[cell.part] -= 1;
+            chosen.push(*cell);
+        }
+        free
+    };
+    let used = flood(lattice, scored, taken, flooded, &mut take);
+    // Cells the flood could not reach from its part's others (another part's cells in between).
+    for (cell, _) in scored.iter().zip(&used).filter(|(_, &used)| !used) {
+        take(cell, taken);
+    }
+    (chosen, missing)
+}
+
+/// Per part, whether the positions `taken` holds for it make more than one edge-connected
+/// piece.
+fn broken_parts(lattice: &Lattice, taken: &FxHashMap<Position, usize>, parts: usize) -> Vec<bool> {
+    let mut pieces = vec![0usize; parts];
+    let mut seen: FxHashSet<Position> = FxHashSet::default();
+    for (&start, &part) in taken {
+        if part >= parts || !seen.insert(start) {
+            continue;
+        }
+        pieces[part] += 1;
+        let mut stack = vec![start];
+        while let Some(p) = stack.pop() {
+            for n in lattice.tiling.edge_neighbours(p).iter() {
+                if taken.get(n) == Some(&part) && seen.insert(*n) {
+                    stack.push(*n);
+                }
+            }
+        }
+    }
+    pieces.iter().map(|&count| count > 1).collect()
+}
+
+/// Offers the `scored` cells (best first) to `take`, those of the `flooded` parts in the order a
+/// flood from the part's cells meets them: a cell wholly inside its part (score 2) is offered in
+/// its turn, any other only once it shares an edge with a cell its part holds (or as the part's
+/// first). Where the outline is thinner than a cell, no cell is wholly inside and the best cells
+/// alone can alternate with worse ones along it (pointy hexagons along a north-south strip take
+/// every other row), which breaks a landmass into pieces the refinement cannot join; flooded,
+/// its cells follow the strip as one block. Returns, per scored cell, whether it was offered.
+fn flood(
+    lattice: &Lattice,
+    scored: &[LatticeCell],
+    taken: &mut FxHashMap<Position, usize>,
+    flooded: &[bool],
+    take: &mut dyn FnMut(&LatticeCell, &mut FxHashMap<Position, usize>) -> bool,
+) -> Vec<bool> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let index: FxHashMap<(Position, usize), usize> = (scored.iter().enumerate())
+        .map(|(k, c)| (((c.col, c.row), c.part), k))
+        .collect();
+    let parts = scored.iter().map(|c| c.part + 1).max().unwrap_or(0);
+    // Per part, its scored cells in order, for its next first cell when one is refused.
+    let mut own: Vec<Vec<usize>> = vec![Vec::new(); parts];
+    for (k, c) in scored.iter().enumerate() {
+        own[c.part].push(k);
+    }
+    let mut holds = vec![false; parts];
+    let mut next_first = vec![0; parts];
+    let mut queued = vec![false; scored.len()];
+    let mut heap = BinaryHeap::new();
+    let queue = |k: usize, queued: &mut [bool], heap: &mut BinaryHeap<Reverse<usize>>| {
+        if !std::mem::replace(&mut queued[k], true) {
+            heap.push(Reverse(k));
+        }
+    };
+    let neighbours_of = |p: Position, part: usize| {
+        (lattice.tiling.edge_neighbours(p).iter())
+            .filter_map(|n| index.get(&(*n, part)).copied())
+            .collect::<Vec<usize>>()
+    };
+    for (k, c) in scored.iter().enumerate() {
+        if c.score >= 2.0 || !flooded[c.part] {
+            queue(k, &mut queued, &mut heap);
+        }
+    }
+    for (&p, &part) in taken.iter().filter(|(_, &part)| part < parts) {
+        holds[part] = true;
+        for k in neighbours_of(p, part) {
+            queue(k, &mut queued, &mut heap);
+        }
+    }
+    for part in (0..parts).filter(|&part| !holds[part]) {
+        if let Some(&k) = own[part].first() {
+            next_first[part] = 1;
+            queue(k, &mut queued, &mut heap);
+        }
+    }
+    let mut offered = vec![false; scored.len()];
+    while let Some(Reverse(k)) = heap.pop() {
+        let cell = scored[k];
+        offered[k] = true;
+        if take(&cell, taken) {
+            holds[cell.part] = true;
+            for n in neighbours_of((cell.col, cell.row), cell.part) {
+                queue(n, &mut queued, &mut heap);
+            }
+        } else if !holds[cell.part] {
+            // Its first cell went to another part: the next best is its first.
+            let list = &own[cell.part];
+            while let Some(&n) = list.get(next_first[cell.part]) {
+                next_first[cell.part] += 1;
+                if !queued[n] {
+                    queue(n, &mut queued, &mut heap);
+                    break;
+                }
+            }
+        }
+    }
+    offered
 }
 
 /// The parts' outlines, each indexed for distances and all in one index, so that whether a
@@ -874,6 +1017,42 @@ mod tests {
                 .filter(|c| c.part == 0)
                 .any(|c| tiling.sharing_an_edge((c.col, c.row), island[0]));
             assert!(!joined, "{orientation:?}: the island joins the mainland");
+        }
+    }
+
+    /// The number of edge-connected pieces the cells of `cells` make.
+    fn pieces(tiling: Tiling, cells: &[LatticeCell]) -> usize {
+        let mut left: Vec<Position> = cells.iter().map(|c| (c.col, c.row)).collect();
+        let mut count = 0;
+        while let Some(start) = left.pop() {
+            count += 1;
+            let mut stack = vec![start];
+            while let Some(p) = stack.pop() {
+                let (joined, rest): (Vec<Position>, Vec<Position>) =
+                    left.iter().partition(|&&q| tiling.sharing_an_edge(p, q));
+                left = rest;
+                stack.extend(joined);
+            }
+        }
+        count
+    }
+
+    #[test]
+    fn a_strip_thinner_than_a_cell_takes_one_piece_of_cells() {
+        // 30 regions in a north-south strip 0.55 cells wide (a long thin country): no cell lies
+        // wholly inside, and the best-covered pointy hexagons alternate with worse ones row by
+        // row, so the 30 best-scored alone make two pieces here (16 on a layer of 30 such
+        // regions after the Snake, through the command line).
+        let strip = rectangle(0.0, 0.0, 0.55, 16.5);
+        for tiling in [
+            Tiling::Square,
+            Tiling::Hex(HexOrientation::Pointy),
+            Tiling::Hex(HexOrientation::Flat),
+        ] {
+            let lattice = frame(&strip, 30, [0.0, 0.0], tiling);
+            let selection = select(&lattice, std::slice::from_ref(&strip), &[30], 1.0, &[]);
+            assert_eq!(selection.cells.len(), 30);
+            assert_eq!(pieces(tiling, &selection.cells), 1, "{tiling:?}");
         }
     }
 }
