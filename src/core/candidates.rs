@@ -409,6 +409,19 @@ impl Input {
                  (too close together to compute with)",
             ));
         }
+        let mut notes = notes;
+        if let Some((share, pair)) = outline::overlaps(&unit_refs, &prepared.regions_union) {
+            let example = pair.map_or(String::new(), |(i, j)| {
+                let id = |k: usize| &regions[order[k]].id;
+                format!(" ({:?} lies on {:?})", id(j), id(i))
+            });
+            notes.push(format!(
+                "regions overlap: {:.1} % of their total area is covered more than once{example}; \
+                 each region still gets its own cell, but a duplicated or stacked feature is \
+                 likely a mistake in the layer",
+                100.0 * share
+            ));
+        }
         Ok(Input {
             order,
             frame,
