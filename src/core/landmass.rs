@@ -7,8 +7,9 @@
 //! covers it best, until every part has its k; a cell not wholly inside waits until it joins
 //! its part's cells (a flood), so that a landmass thinner than a cell stays one block; a part
 //! whose outline covers fewer than k cells (a small landmass of many regions, a tiny island)
-//! then takes the free positions nearest to its outline. The same rule, with `ratio`·k cells per part, gives the refinement its pool of free
-//! cells, each tagged with its part: a region only ever moves within its own landmass.
+//! then takes the free positions nearest to its outline. The same rule, with `ratio`·k cells
+//! per part, gives the refinement its pool of free cells, each tagged with its part: a region
+//! only ever moves within its own landmass.
 //!
 //! Once assigned, each part's block of cells is moved as a whole to where §8 measures its
 //! regions from ([`settle`]): the Snake deforms the oceans between landmasses, so a block laid on

@@ -11,7 +11,7 @@ use super::Params;
 use geo::orient::{Direction, Orient};
 use geo::{
     Area, BoundingRect, Centroid, Contains, Coord, Intersects, LineString, MultiPolygon, Point,
-    Polygon, SimplifyVwPreserve, Triangle,
+    Polygon, Rect, SimplifyVwPreserve, Triangle,
 };
 use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
@@ -135,18 +135,7 @@ pub fn overlaps(
     if share.is_nan() || share <= OVERLAP_NOTED {
         return None;
     }
-    let boxes: RTree<GeomWithData<Rectangle<[f64; 2]>, usize>> = RTree::bulk_load(
-        (regions.iter().enumerate())
-            .filter_map(|(k, r)| {
-                let b = r.bounding_rect()?;
-                let corners = ([b.min().x, b.min().y], [b.max().x, b.max().y]);
-                Some(GeomWithData::new(
-                    Rectangle::from_corners(corners.0, corners.1),
-                    k,
-                ))
-            })
-            .collect(),
-    );
+    let boxes = box_tree(regions.iter().map(|r| r.bounding_rect()));
     let pair = (0..regions.len()).find_map(|j| {
         let p = interior_point_of_all(regions[j])?;
         (boxes.locate_all_at_point(&[p.x, p.y]))
@@ -156,6 +145,25 @@ pub fn overlaps(
             .map(|i| (i, j))
     });
     Some((share, pair))
+}
+
+/// The bounding boxes `boxes` (none for an empty geometry), each with its index, in an R-tree.
+fn box_tree(
+    boxes: impl Iterator<Item = Option<Rect<f64>>>,
+) -> RTree<GeomWithData<Rectangle<[f64; 2]>, usize>> {
+    RTree::bulk_load(
+        boxes
+            .enumerate()
+            .filter_map(|(k, b)| {
+                let b = b?;
+                let corners = ([b.min().x, b.min().y], [b.max().x, b.max().y]);
+                Some(GeomWithData::new(
+                    Rectangle::from_corners(corners.0, corners.1),
+                    k,
+                ))
+            })
+            .collect(),
+    )
 }
 
 /// For each point, the part of the outline `rings` whose inside holds it (the nearest part for
@@ -204,18 +212,7 @@ fn landmasses(
             ]))))
         })
     };
-    let boxes: RTree<GeomWithData<Rectangle<[f64; 2]>, usize>> = RTree::bulk_load(
-        (union.0.iter().enumerate())
-            .filter_map(|(k, p)| {
-                let b = p.bounding_rect()?;
-                let corners = ([b.min().x, b.min().y], [b.max().x, b.max().y]);
-                Some(GeomWithData::new(
-                    Rectangle::from_corners(corners.0, corners.1),
-                    k,
-                ))
-            })
-            .collect(),
-    );
+    let boxes = box_tree(union.0.iter().map(|p| p.bounding_rect()));
     // A point of a region lies in the union: when no smaller candidate holds it, the largest
     // does, so that the mainland of a dense layer never needs its index.
     let sizes: Vec<usize> = union.0.iter().map(|p| p.exterior().0.len()).collect();
