@@ -4,8 +4,9 @@
 //! crowded one (Europe) needs, and no region crosses an ocean.
 //!
 //! Cells are handed out best score first over all parts together, each cell to the part that
-//! covers it best, until every part has its k; a cell not wholly inside waits until it joins
-//! its part's cells (a flood), so that a landmass thinner than a cell stays one block; a part
+//! covers it best, until every part has its k. A part that this leaves in pieces takes its
+//! cells again by a flood (a cell not wholly inside waits until it joins the part's cells) when
+//! that makes it one piece, so that a landmass thinner than a cell stays one block. A part
 //! whose outline covers fewer than k cells (a small landmass of many regions, a tiny island)
 //! then takes the free positions nearest to its outline. The same rule, with `ratio`·k cells
 //! per part, gives the refinement its pool of free cells, each tagged with its part: a region
