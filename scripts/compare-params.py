@@ -5,9 +5,8 @@ One seed's layout is one draw: on virginia_counties the default's adjacency rang
 0.864 over seeds 0-3, more than most changes move it. This runs the command line with settings A
 and with settings B on the shared layers (but us_counties) and on generated ones
 (make-test-layers.py: Voronoi layers of 150, 300 and 600 regions, islands, two river layers, a
-thin country),
-for seeds 0..N-1, judges every layout with the shared judge (method.md §8), and prints per layer
-the mean of B minus the mean of A, then the mean over the layers. A default changes only when B
+thin country), for seeds 0..N-1, judges every layout with the shared judge (method.md §8), and
+prints per layer the mean of B minus the mean of A, then the mean over the layers. A default changes only when B
 wins on the means without losing a shared layer's bar (QUALITY.md at seed 0 is what the issues
 hold; BENCHMARKS.md "Settings tried over seeds" has the sweeps so far).
 

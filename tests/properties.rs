@@ -423,14 +423,15 @@ fn thin_country(count: usize) -> Vec<Region> {
 #[test]
 fn a_country_thinner_than_a_cell_stays_one_piece() {
     // No cell lies wholly inside the strip, and the best-covered cells alone alternate with
-    // worse ones along it: before the flood (landmass::select) the generated strip layer of
-    // scripts/make-test-layers.py came out in 14 pieces with squares and 7 with hexagons.
+    // worse ones along it: before the flood (landmass::select) this layer came out in 14
+    // pieces as squares (the generated strip of scripts/make-test-layers.py: 14 as squares, 7
+    // as pointy hexagons).
+    let regions = thin_country(40);
     for (cell, orientation) in [
         (CellShape::Square, HexOrientation::Pointy),
         (CellShape::Hex, HexOrientation::Pointy),
         (CellShape::Hex, HexOrientation::Flat),
     ] {
-        let regions = thin_country(40);
         let params = Params {
             cell,
             hex_orientation: orientation,

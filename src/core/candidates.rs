@@ -380,7 +380,7 @@ impl Input {
             placed: Placed { order, frame, unit },
             valid_here,
             drawn,
-            notes,
+            mut notes,
         } = check(regions)?;
         let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
         let drawn_refs: Vec<&MultiPolygon<f64>> = (unit.iter().zip(&drawn))
@@ -409,7 +409,6 @@ impl Input {
                  (too close together to compute with)",
             ));
         }
-        let mut notes = notes;
         if let Some((share, pair)) = outline::overlaps(&unit_refs, &prepared.regions_union) {
             let example = pair.map_or(String::new(), |(i, j)| {
                 let id = |k: usize| &regions[order[k]].id;
