@@ -3,7 +3,7 @@
 //! (docs/c-api.md) always give a valid grid map (one distinct equal square per region on one
 //! lattice, finite metrics) that does not depend on the order of the features.
 
-use geo::{Area, Coord, LineString, MultiPolygon, Polygon};
+use geo::{Area, Centroid, Coord, LineString, MapCoords, MultiPolygon, Polygon};
 use proptest::prelude::*;
 use snakegrid::params::{CellShape, HexOrientation, Kind, Parameter};
 use snakegrid::{generate, GridMap, Params, Region, PARAMETERS};
@@ -448,4 +448,32 @@ fn a_country_thinner_than_a_cell_stays_one_piece() {
         // A chain of 39 neighbour pairs in one piece: at most a few bends lose a pair.
         assert!(m.adjacent >= 0.9, "{cell:?} {orientation:?}: {m:?}");
     }
+}
+
+#[test]
+fn regions_drawn_a_hairline_apart_are_laid_out_as_one_landmass() {
+    // The thin country's regions each shrunk towards their centroid by a thousandth: neighbours
+    // stand under a thousandth of a cell apart, as after a per-feature simplification or a
+    // careless digitising. Before the outline closed such gaps (outline::close_gaps), each region
+    // was an island with a budget of its own and the layout fell apart (18 pieces here; us_states
+    // shrunk so: 4 pieces, Florida beside Tennessee).
+    let whole = thin_country(40);
+    let shrunk: Vec<Region> = (whole.iter().cloned())
+        .map(|mut region| {
+            let c = region.geometry.centroid().expect("a region has area").0;
+            region.geometry = region.geometry.map_coords(|p| c + (p - c) * 0.999);
+            region
+        })
+        .collect();
+    let map = run(&shrunk, &Params::default());
+    common::assert_valid_grid(&shrunk, &map);
+    let m = &map.metrics;
+    assert_eq!((m.pieces, m.holes), (1, 0), "{m:?}");
+    // Laid out as the country drawn whole is: each cell as near its region (a tenth of a cell
+    // of slack for the outline's small change).
+    let reference = run(&whole, &Params::default()).metrics;
+    assert!(
+        m.location <= reference.location + 0.1,
+        "{m:?} against {reference:?}"
+    );
 }

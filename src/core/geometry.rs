@@ -107,6 +107,16 @@ pub fn segments_intersect(p1: Coord<f64>, p2: Coord<f64>, q1: Coord<f64>, q2: Co
     on(q1, q2, p1, d1) || on(q1, q2, p2, d2) || on(p1, p2, q1, d3) || on(p1, p2, q2, d4)
 }
 
+/// Squared distance between the segments `a`–`b` and `c`–`d`: 0 where they meet, else the least
+/// from an end of one to the other.
+pub fn segment_distance2(a: Coord<f64>, b: Coord<f64>, c: Coord<f64>, d: Coord<f64>) -> f64 {
+    if segments_intersect(a, b, c, d) {
+        return 0.0;
+    }
+    (point_segment_distance2(a, c, d).min(point_segment_distance2(b, c, d)))
+        .min(point_segment_distance2(c, a, b).min(point_segment_distance2(d, a, b)))
+}
+
 /// A point inside `polygon` (its holes respected): the middle of the widest span of the
 /// horizontal line at mid-height, moved halfway to the nearest other vertex level if a vertex
 /// lies on it — geo's `InteriorPoint` rule, in O(n log n) where geo intersects every segment

@@ -4,17 +4,19 @@
 
 use super::geometry::{
     interior_point, interior_point_of_all, lowest, nearest_on_segment, point_segment_distance2,
-    segments_intersect, RingIndex,
+    segment_distance2, segments_intersect, RingIndex,
 };
+use super::network::DisjointSets;
 use super::overlay::{self, Given};
 use super::Params;
+use geo::algorithm::buffer::{BufferStyle, LineJoin};
 use geo::orient::{Direction, Orient};
 use geo::{
-    Area, BoundingRect, Centroid, Contains, Coord, Intersects, LineString, MultiPolygon, Point,
-    Polygon, Rect, SimplifyVwPreserve, Triangle,
+    Area, BoundingRect, Buffer, Centroid, Contains, Coord, Intersects, LineString, MultiPolygon,
+    Point, Polygon, Rect, SimplifyVwPreserve, Triangle,
 };
 use rayon::prelude::*;
-use rstar::primitives::{GeomWithData, Rectangle};
+use rstar::primitives::{GeomWithData, Line, Rectangle};
 use rstar::{RTree, RTreeObject, AABB};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -36,6 +38,12 @@ const FINEST_DETAIL: f64 = 0.5e-4;
 /// Share of the regions' total area covered twice or more above which the overlap is reported:
 /// well above rounding, and below a region of a thousand overlapping a neighbour.
 const OVERLAP_NOTED: f64 = 1e-3;
+/// Gap between parts of the outline, in cells, under which they are one part ([`close_gaps`]):
+/// the outline's resolution, as for [`FINEST_DETAIL`].
+const GAP_CLOSED: f64 = 1e-2;
+/// Corners sharper than this (radians) are bevelled by the closing's widening: a spike's miter
+/// would reach out of all proportion.
+const MITER_ANGLE: f64 = 0.1;
 /// A centroid outside the simplified outline is moved this far inside it, in cells (§1).
 const INSIDE_MARGIN: f64 = 0.05;
 
@@ -444,25 +452,16 @@ fn clusters(regions: &[&MultiPolygon<f64>]) -> Vec<Vec<usize>> {
             .collect(),
     );
     // Union–find over the overlapping pairs, each group rooted at its smallest region.
-    let mut root: Vec<usize> = (0..regions.len()).collect();
-    fn find(root: &mut [usize], mut k: usize) -> usize {
-        while root[k] != k {
-            root[k] = root[root[k]];
-            k = root[k];
-        }
-        k
-    }
+    let mut sets = DisjointSets::new(regions.len());
     for (k, b) in boxes.iter().enumerate() {
         let Some(b) = b else { continue };
         for other in tree.locate_in_envelope_intersecting(b) {
-            let (a, c) = (find(&mut root, k), find(&mut root, other.data));
-            root[a.max(c)] = a.min(c);
+            sets.union(k, other.data);
         }
     }
     let mut groups: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
     for k in 0..regions.len() {
-        let r = find(&mut root, k);
-        groups.entry(r).or_default().push(k);
+        groups.entry(sets.find(k)).or_default().push(k);
     }
     groups.into_values().collect()
 }
@@ -493,6 +492,11 @@ fn merge(
             overlay::union(&oriented, given)
         })
         .collect();
+    by_lowest_vertex(parts.into_iter().flatten())
+}
+
+/// `parts` ordered by their lowest (x, then y) vertex, as the overlay writes them.
+fn by_lowest_vertex(parts: impl Iterator<Item = Polygon<f64>>) -> MultiPolygon<f64> {
     let lowest_vertex = |p: &Polygon<f64>| {
         let ring = &p.exterior().0;
         lowest(ring).map_or(
@@ -503,11 +507,80 @@ fn merge(
             |k| ring[k],
         )
     };
-    let mut parts: Vec<(Coord<f64>, Polygon<f64>)> = (parts.into_iter().flatten())
-        .map(|p| (lowest_vertex(&p), p))
-        .collect();
+    let mut parts: Vec<(Coord<f64>, Polygon<f64>)> =
+        parts.map(|p| (lowest_vertex(&p), p)).collect();
     parts.sort_by(|(p, _), (q, _)| p.x.total_cmp(&q.x).then(p.y.total_cmp(&q.y)));
     MultiPolygon(parts.into_iter().map(|(_, p)| p).collect())
+}
+
+/// The parts of `union` that come nearer each other than [`GAP_CLOSED`] joined into one, by a
+/// closing (widened by half the gap, then narrowed by as much), the other parts as they are.
+/// Regions drawn or simplified apart, one by one, leave hairline gaps between neighbours (North
+/// Carolina's counties shrunk by 3.5 m, a ten-thousandth of a cell, gave 108 landmasses: each
+/// county an island with a budget of its own, and simplified rings crossing their neighbours');
+/// and a strait that narrow is below the outline's resolution. The judge's landmasses
+/// (method.md §8) stay those of the exact union: only the layout's outline is closed.
+fn close_gaps(union: MultiPolygon<f64>) -> MultiPolygon<f64> {
+    if union.0.len() < 2 {
+        return union;
+    }
+    let gap = GAP_CLOSED;
+    let widened = |b: Rect<f64>| {
+        let d = Coord { x: gap, y: gap };
+        Rect::new(b.min() - d, b.max() + d)
+    };
+    let boxes = box_tree(union.0.iter().map(|p| p.bounding_rect().map(widened)));
+    // Only segments within another part's widened box can be near it.
+    let segments: Vec<GeomWithData<Line<[f64; 2]>, usize>> = (union.0.iter().enumerate())
+        .flat_map(|(k, p)| {
+            std::iter::once(p.exterior())
+                .chain(p.interiors())
+                .flat_map(|r| r.lines())
+                .map(move |l| (k, l))
+        })
+        .filter(|(k, l)| {
+            let b = l.bounding_rect();
+            let envelope = AABB::from_corners([b.min().x, b.min().y], [b.max().x, b.max().y]);
+            (boxes.locate_in_envelope_intersecting(&envelope)).any(|o| o.data != *k)
+        })
+        .map(|(k, l)| GeomWithData::new(Line::new([l.start.x, l.start.y], [l.end.x, l.end.y]), k))
+        .collect();
+    let tree = RTree::bulk_load(segments);
+    let mut sets = DisjointSets::new(union.0.len());
+    let coord = |p: [f64; 2]| Coord { x: p[0], y: p[1] };
+    for s in tree.iter() {
+        let (a, b) = (coord(s.geom().from), coord(s.geom().to));
+        let near = widened(Rect::new(a, b));
+        let envelope =
+            AABB::from_corners([near.min().x, near.min().y], [near.max().x, near.max().y]);
+        for t in tree.locate_in_envelope_intersecting(&envelope) {
+            if t.data <= s.data || sets.find(t.data) == sets.find(s.data) {
+                continue;
+            }
+            let (c, d) = (coord(t.geom().from), coord(t.geom().to));
+            if segment_distance2(a, b, c, d) < gap * gap {
+                sets.union(s.data, t.data);
+            }
+        }
+    }
+    let mut groups: std::collections::BTreeMap<usize, Vec<Polygon<f64>>> = Default::default();
+    for (k, p) in union.0.into_iter().enumerate() {
+        groups.entry(sets.find(k)).or_default().push(p);
+    }
+    let style = |d: f64| BufferStyle::new(d).line_join(LineJoin::Miter(MITER_ANGLE));
+    by_lowest_vertex(groups.into_values().flat_map(|parts| {
+        match parts.len() {
+            1 => parts,
+            _ => MultiPolygon(parts)
+                .buffer_with_style(style(0.5 * gap))
+                .buffer_with_style(style(-0.5 * gap))
+                .0
+                .into_iter()
+                .filter(|p| p.unsigned_area() >= gap * gap)
+                .map(without_slivers)
+                .collect(),
+        }
+    }))
 }
 
 /// Drops parts that hold no centroid (stray islands of multipart regions) and fills holes that
@@ -525,15 +598,18 @@ fn clean(union: MultiPolygon<f64>, centroids: &[Coord<f64>]) -> MultiPolygon<f64
                 .filter(|c| bounds.intersects(&Point(**c)))
                 .any(|&c| shell.contains(&Point(c)))
         })
-        .map(|part| {
-            let (exterior, holes) = part.into_inner();
-            let holes = holes
-                .into_iter()
-                .filter(|h| Polygon::new(h.clone(), vec![]).unsigned_area() >= SLIVER_AREA)
-                .collect();
-            Polygon::new(exterior, holes)
-        });
+        .map(without_slivers);
     MultiPolygon(parts.collect())
+}
+
+/// `part` with its holes smaller than [`SLIVER_AREA`] filled.
+fn without_slivers(part: Polygon<f64>) -> Polygon<f64> {
+    let (exterior, holes) = part.into_inner();
+    let holes = holes
+        .into_iter()
+        .filter(|h| Polygon::new(h.clone(), vec![]).unsigned_area() >= SLIVER_AREA)
+        .collect();
+    Polygon::new(exterior, holes)
 }
 
 fn vertex_count(p: &MultiPolygon<f64>) -> usize {
@@ -552,17 +628,21 @@ fn vertex_count(p: &MultiPolygon<f64>) -> usize {
 /// rings cross each other is refused and the tolerance lowered.
 fn simplify(union: &MultiPolygon<f64>, target: usize, tolerance: Option<f64>) -> MultiPolygon<f64> {
     if tolerance.is_none() && vertex_count(union) <= target {
-        return union.clone();
+        return close_gaps(union.clone());
     }
     let coarse = |p: &MultiPolygon<f64>| RingIndex::new(&coords_of(&rings_of(p))).self_intersects();
     // Vertices within a tenth of the finest detail of the last one kept go first, in linear
     // time, then plain Visvalingam, which needs no segment index; the topology-preserving
     // variant only if that made rings cross.
     let finest = FINEST_DETAIL.min(tolerance.unwrap_or(f64::INFINITY));
-    let fine = Some(visvalingam(&thin(union, 0.1 * finest.sqrt()), finest))
-        .filter(|p| !coarse(p))
-        .or_else(|| Some(union.simplify_vw_preserve(finest)).filter(|p| !coarse(p)));
-    let fine = fine.as_ref().unwrap_or(union);
+    let fine = Some(close_gaps(visvalingam(
+        &thin(union, 0.1 * finest.sqrt()),
+        finest,
+    )))
+    .filter(|p| !coarse(p))
+    .or_else(|| Some(close_gaps(union.simplify_vw_preserve(finest))).filter(|p| !coarse(p)))
+    .unwrap_or_else(|| close_gaps(union.clone()));
+    let fine = &fine;
     let eps = match tolerance {
         Some(eps) => eps,
         None if vertex_count(fine) <= target => return fine.clone(),
@@ -996,6 +1076,27 @@ mod tests {
             .len(),
             20
         );
+    }
+
+    #[test]
+    fn parts_a_hairline_apart_are_joined_and_parts_further_apart_kept() {
+        let prepared = |gap: f64| {
+            let regions = [square(0.0, 0.0), square(1.0 + gap, 0.2)];
+            let refs: Vec<&MultiPolygon<f64>> = regions.iter().collect();
+            prepare(&refs, &refs, &[true, true], &Params::default(), &|_, _| ())
+        };
+        // Half the closed gap: one part, about the two squares' area (the closing fills the
+        // gap's 0.8 × 0.005 strip, and no more than a few gap-wide corners besides).
+        let joined = prepared(0.5 * GAP_CLOSED);
+        assert_eq!(joined.rings.len(), 1, "{:?}", joined.rings);
+        let area = polygons_of(&joined.rings).unsigned_area();
+        assert!((area - 2.0).abs() < 0.01, "{area}");
+        // The exact union, the judge's landmasses, keeps both parts.
+        assert_eq!(joined.regions_union.0.len(), 2);
+        // Twice the closed gap: two parts, each its own square, untouched.
+        let apart = prepared(2.0 * GAP_CLOSED);
+        assert_eq!(apart.rings.len(), 2);
+        assert_eq!(polygons_of(&apart.rings).unsigned_area(), 2.0);
     }
 
     #[test]
