@@ -248,14 +248,16 @@ impl RingIndex {
     /// Whether two segments of the rings meet anywhere other than at the vertex that joins
     /// consecutive segments of one ring: a valid outline has no such pair.
     pub fn self_intersects(&self) -> bool {
-        self.tree.iter().any(|s| {
-            self.tree
-                .locate_in_envelope_intersecting(&s.envelope())
-                .any(|t| {
-                    (t.ring, t.index) != (s.ring, s.index)
-                        && !self.consecutive(s, t)
-                        && segments_intersect(s.a, s.b, t.a, t.b)
-                })
+        self.tree.iter().any(|s| self.meets_another(s))
+    }
+
+    /// Whether segment `s` of the rings meets another anywhere other than at the vertex it
+    /// shares with the next or the previous segment of its ring.
+    pub fn meets_another(&self, s: &Segment) -> bool {
+        (self.tree.locate_in_envelope_intersecting(&s.envelope())).any(|t| {
+            (t.ring, t.index) != (s.ring, s.index)
+                && !self.consecutive(s, t)
+                && segments_intersect(s.a, s.b, t.a, t.b)
         })
     }
 
