@@ -31,12 +31,16 @@ make river 33 6 "$work/river_33.gpkg"
 make archipelago 3000 300 5 "$work/archipelago.gpkg"
 # a long thin country of 40 regions, 0.7 cells wide
 make strip 40 9 "$work/strip.gpkg"
+# us_states with neighbours a five-hundredth of a cell apart, judged against us_states itself
+# (its own regions share no border for the judge to count)
+make apart "$data/us_states.gpkg" 0.001 "$work/us_states_apart.gpkg"
+declare -A judged_against=(["us_states_apart"]="$data/us_states.gpkg")
 layers=(
     "$data/us_states.gpkg" "$data/nc_counties.gpkg" "$data/virginia_counties.gpkg"
     "$data/world_countries.gpkg" "$data/us_counties.gpkg"
     "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
     "$work/river_33.gpkg"
-    "$work/archipelago.gpkg" "$work/strip.gpkg"
+    "$work/archipelago.gpkg" "$work/strip.gpkg" "$work/us_states_apart.gpkg"
 )
 
 rows="$work/rows.tsv"
@@ -54,7 +58,7 @@ for source in "${layers[@]}"; do
         started=$(date +%s.%N)
         "$cli" -q -id id "${options[@]}" "$grid" "$source"
         seconds=$(echo "$(date +%s.%N) - $started" | bc)
-        python3 "$judge" --regions "$source" --grid "$grid" --id id |
+        python3 "$judge" --regions "${judged_against[$name]:-$source}" --grid "$grid" --id id |
             python3 -c '
 import json, sys
 j = json.load(sys.stdin)
@@ -121,7 +125,9 @@ markdown_rows() {
     echo "from \`scripts/make-test-layers.py\`: random Voronoi cells of 300 and 3,000 regions, three"
     echo "far-apart landmasses with islands (\`islands\`), Voronoi cells cut by a winding river gap"
     echo "(\`river\`), a mainland of 3,000 Voronoi cells ringed by 300 one-region islands"
-    echo "(\`archipelago\`), and a long thin country of 40 Voronoi cells 0.7 cells wide (\`strip\`)."
+    echo "(\`archipelago\`), a long thin country of 40 Voronoi cells 0.7 cells wide (\`strip\`), and"
+    echo "us_states with every state narrowed by a thousandth of a cell (\`us_states_apart\`: regions"
+    echo "drawn one by one, neighbours a hairline apart), judged against us_states itself."
     echo
     echo "Columns: C_adjacent in the 8-neighbourhood and the 4-neighbourhood (shared edge), the"
     echo "false-neighbour share, C_orientation (degrees) and the misdirected share (> 45°),"

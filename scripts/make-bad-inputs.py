@@ -92,7 +92,10 @@ def main():
     os.makedirs(OUT)
     cases = []
 
-    def case(file, expect, text, id_field="code"):
+    def case(file, expect, text, id_field="code", why=None):
+        """`why`, where the text holds a hand count, goes above the line as a comment."""
+        if why:
+            cases.append(("# " + why,))
         cases.append((file, id_field, expect, text))
 
     # GeoJSON keeps no schema without features, so no -id field either.
@@ -147,7 +150,8 @@ def main():
     # Each of a row of squares overlaps the next by a fifth.
     overlapping = [feature(f"o{i}", "Polygon", square(500000 + 800 * i, 5000000, 1000)) for i in range(4)]
     geojson("overlapping.geojson", overlapping)
-    case("overlapping.geojson", "ok", "-")
+    case("overlapping.geojson", "ok", "regions overlap: 15.0 %",
+         why="four 1 km squares, each overlapping the next by 0.2 km²: 0.6 of 4 km² counted twice")
 
     dupes = block(2, 2)
     dupes[3]["properties"]["code"] = "r00"
@@ -226,6 +230,24 @@ def main():
                 'b,"POLYGON((2 0,3 0,3 1,2 1,2 0))"\n')
     case("curved.csv", "invalid_input", "feature a: curved geometries (CURVEPOLYGON) are not supported",
          id_field="id")
+
+    # A feature drawn over another.
+    stacked = [feature(f"s{i}", "Polygon", square(500000 + 1000 * i, 5000000, 1000)) for i in range(2)] + [
+        feature("s2", "Polygon", [[[500200, 5000200], [500800, 5000200], [500800, 5000800],
+                                   [500200, 5000800], [500200, 5000200]]])]
+    geojson("stacked.geojson", stacked)
+    case("stacked.geojson", "ok",
+         'regions overlap: 15.3 % of their total area is covered more than once ("s2" lies on "s0")',
+         why="a feature drawn over another: 0.36 km² of 2.36 km² counted twice (15.3 %)")
+
+    # A 3 × 3 block of 1 km squares drawn apart: each narrowed by 2 m, so neighbours stand 4 m
+    # (a 250th of a cell) apart and share no border.
+    apart = [feature(f"a{j}{i}", "Polygon",
+                     square(500000 + 1000 * i + 2, 5000000 + 1000 * j + 2, 996))
+             for j in range(3) for i in range(3)]
+    geojson("apart.geojson", apart)
+    case("apart.geojson", "ok", "regions stand apart: 12 pair(s) of regions share no border",
+         why="a 3 × 3 block a hairline apart: its 12 rook pairs face each other across the gaps")
 
     with open(os.path.join(OUT, "cases.tsv"), "w", encoding="utf-8") as f:
         f.write("# file\tid field\texpected (ok, or the kind of error: invalid_input, io_error)\ttext the error message or a note must hold (- for none)\n")

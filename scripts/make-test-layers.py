@@ -13,6 +13,10 @@
     make-test-layers.py strip N SEED OUT.gpkg       a long thin country (Chile, Norway, Vietnam):
                                                     Voronoi cells of a tilted strip 0.7 cells
                                                     wide, N regions
+    make-test-layers.py apart SRC CELLS OUT.gpkg    SRC with every region narrowed by CELLS cells
+                                                    (a cell: the square root of the mean region
+                                                    area), so that neighbours stand 2 x CELLS
+                                                    apart: regions drawn or simplified one by one
     make-test-layers.py densify SRC VERTICES OUT.gpkg
                                                     SRC with every edge subdivided, to about
                                                     VERTICES vertices in all, with a small wiggle
@@ -215,6 +219,15 @@ def densify(src, vertices):
     return [str(v) for v in fields[0]], out, info["crs"]
 
 
+def apart(src, cells):
+    info = pyogrio.read_info(src)
+    _, _, wkb, fields = pyogrio.raw.read(src, columns=["id"])
+    geometries = shapely.from_wkb(wkb)
+    cell = math.sqrt(shapely.area(geometries).sum() / len(geometries))
+    narrowed = shapely.buffer(geometries, -cells * cell, join_style="mitre")
+    return [str(v) for v in fields[0]], list(narrowed), info["crs"]
+
+
 def star(vertices):
     t = np.linspace(0, 2 * math.pi, vertices, endpoint=False)
     r = SIDE * (0.5 + 0.4 * np.where(np.arange(vertices) % 2 == 0, 1.0, 0.2))
@@ -248,6 +261,9 @@ def main(argv):
     elif kind == "strip":
         ids, geometries = strip(int(args[0]), int(args[1]))
         write(args[2], ids, geometries)
+    elif kind == "apart":
+        ids, geometries, crs = apart(args[0], float(args[1]))
+        write(args[2], ids, geometries, crs)
     elif kind == "densify":
         ids, geometries, crs = densify(args[0], int(float(args[1])))
         write(args[2], ids, geometries, crs)

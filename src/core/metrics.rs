@@ -43,7 +43,7 @@ impl Reference {
             (prepared.area_centroids.iter())
                 .map(|&c| frame.to_map(c))
                 .collect(),
-            prepared.adjacency.clone(),
+            prepared.neighbours.clone(),
             frame.polygons_to_map(&prepared.regions_union),
             prepared.landmass_of.clone(),
             frame.scale,
