@@ -345,12 +345,17 @@ fn nearest_free(
     let mut margin = (count as f64).sqrt().ceil() as i32 + 1;
     // The first margin whose square settled `count` positions, own side or not.
     let mut enough_at: Option<i32> = None;
+    // Each position's distances, kept as the square doubles (`taken` holds still until the
+    // end): a crowd of small landmasses searched them over and over.
+    let mut measured: FxHashMap<Position, (f64, bool)> = FxHashMap::default();
     loop {
         let mut free: Vec<(bool, bool, f64, i32, i32)> = Vec::new();
         for row in low.1 - margin..=high.1 + margin {
             for col in low.0 - margin..=high.0 + margin {
                 if !taken.contains_key(&(col, row)) {
-                    let (own, elsewhere) = outlines.distance(part, lattice.centre(col, row));
+                    let (own, elsewhere) = *measured
+                        .entry((col, row))
+                        .or_insert_with(|| outlines.distance(part, lattice.centre(col, row)));
                     let touches = touches_another(lattice, taken, (col, row), part);
                     free.push((elsewhere, touches, own, row, col));
                 }
