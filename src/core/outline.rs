@@ -132,9 +132,9 @@ pub fn prepare(
     // Small layers still keep a quadrilateral per ring on average.
     let target = ((params.vertices_per_region * regions.len() as f64).ceil() as usize)
         .max(4 * rings_of(&union).len());
-    let simplified = simplify(&union, target, params.simplify_tolerance);
+    let (simplified, joined) = simplify(&union, target, params.simplify_tolerance);
     // Parts joined across hairline gaps: their regions' borders lie across the gaps too.
-    let neighbours = if simplified.0.len() < union.0.len() {
+    let neighbours = if joined {
         let near = self::adjacency(
             drawn,
             &self::clusters(drawn, ACROSS_GAPS.reach),
@@ -558,10 +558,11 @@ fn by_lowest_vertex(parts: impl Iterator<Item = Polygon<f64>>) -> MultiPolygon<f
 /// Carolina's counties shrunk by 3.5 m, a ten-thousandth of a cell, gave 108 landmasses: each
 /// county an island with a budget of its own, and simplified rings crossing their neighbours');
 /// and a strait that narrow is below the outline's resolution. The judge's landmasses
-/// (method.md §8) stay those of the exact union: only the layout's outline is closed.
-fn close_gaps(union: MultiPolygon<f64>) -> MultiPolygon<f64> {
+/// (method.md §8) stay those of the exact union: only the layout's outline is closed. Also
+/// says whether any parts were joined.
+fn close_gaps(union: MultiPolygon<f64>) -> (MultiPolygon<f64>, bool) {
     if union.0.len() < 2 {
-        return union;
+        return (union, false);
     }
     let gap = GAP_CLOSED;
     let widened = |b: Rect<f64>| {
@@ -606,8 +607,11 @@ fn close_gaps(union: MultiPolygon<f64>) -> MultiPolygon<f64> {
     for (k, p) in union.0.into_iter().enumerate() {
         groups.entry(sets.find(k)).or_default().push(p);
     }
+    let joined = groups.values().any(|parts| parts.len() > 1);
     let style = |d: f64| BufferStyle::new(d).line_join(LineJoin::Miter(MITER_ANGLE));
-    by_lowest_vertex(groups.into_values().flat_map(|parts| {
+    // The widening and narrowing leave specks where rings met at a point (a triangle of no
+    // size on a joined ring made the outline cross itself): dropped.
+    let closed = by_lowest_vertex(groups.into_values().flat_map(|parts| {
         match parts.len() {
             1 => parts,
             _ => MultiPolygon(parts)
@@ -619,7 +623,8 @@ fn close_gaps(union: MultiPolygon<f64>) -> MultiPolygon<f64> {
                 .map(without_slivers)
                 .collect(),
         }
-    }))
+    }));
+    (closed, joined)
 }
 
 /// Drops parts that hold no centroid (stray islands of multipart regions) and fills holes that
@@ -664,8 +669,14 @@ fn vertex_count(p: &MultiPolygon<f64>) -> usize {
 /// leaves plain Visvalingam (ten times faster than the topology-preserving variant, and close
 /// enough for "about") with `target` vertices ([`tolerance_for`]); the topology-preserving
 /// variant then runs once. geo preserves topology within each part only, so a result whose
-/// rings cross each other is refused and the tolerance lowered.
-fn simplify(union: &MultiPolygon<f64>, target: usize, tolerance: Option<f64>) -> MultiPolygon<f64> {
+/// rings cross each other is refused and the tolerance lowered. Parts nearer each other than
+/// the outline's resolution are joined ([`close_gaps`]) once the finest detail is gone (a
+/// hairline apart, simplified rings cross); also says whether any were.
+fn simplify(
+    union: &MultiPolygon<f64>,
+    target: usize,
+    tolerance: Option<f64>,
+) -> (MultiPolygon<f64>, bool) {
     if tolerance.is_none() && vertex_count(union) <= target {
         return close_gaps(union.clone());
     }
@@ -678,24 +689,24 @@ fn simplify(union: &MultiPolygon<f64>, target: usize, tolerance: Option<f64>) ->
         &thin(union, 0.1 * finest.sqrt()),
         finest,
     )))
-    .filter(|p| !coarse(p))
-    .or_else(|| Some(close_gaps(union.simplify_vw_preserve(finest))).filter(|p| !coarse(p)))
+    .filter(|(p, _)| !coarse(p))
+    .or_else(|| Some(close_gaps(union.simplify_vw_preserve(finest))).filter(|(p, _)| !coarse(p)))
     .unwrap_or_else(|| close_gaps(union.clone()));
-    let fine = &fine;
+    let (fine, joined) = (&fine.0, fine.1);
     let eps = match tolerance {
         Some(eps) => eps,
-        None if vertex_count(fine) <= target => return fine.clone(),
+        None if vertex_count(fine) <= target => return (fine.clone(), joined),
         None => tolerance_for(fine, target),
     };
     let mut eps = eps;
     while eps > 1e-12 {
         let simplified = fine.simplify_vw_preserve(eps);
         if !coarse(&simplified) {
-            return simplified;
+            return (simplified, joined);
         }
         eps *= 0.5;
     }
-    fine.clone()
+    (fine.clone(), joined)
 }
 
 /// Tolerances below this simplify nothing that matters (cells² in the unit-cell frame), and a
