@@ -230,7 +230,7 @@ impl<'a> Sparse<'a> {
     fn new(costs: &'a Costs<'a>, prices: Vec<f64>) -> Self {
         let n = costs.len();
         let odd_cells: Vec<usize> = (0..n).filter(|&j| !finite(costs.cells[j])).collect();
-        let tree = lifted_cells(costs.cells, &prices);
+        let (tree, _) = lifted_cells(costs.cells, &prices);
         let mut candidates: Vec<Vec<usize>> = (0..n)
             .map(|row| columns_to_check(costs, &tree, &odd_cells, row, NEAREST))
             .collect();
@@ -377,18 +377,45 @@ impl<'a> Sparse<'a> {
         }
     }
 
+    /// Whether no column has a negative reduced cost for `row`, by a ball query on the lifted
+    /// `tree` (built with `top`): cell j lies at squared distance c_ij + top − v_j from the
+    /// row's point, so the negative ones lie within u_i + top. Most rows have none, and a ball
+    /// that holds about one cell is far cheaper than a nearest-neighbour search; `false` sends
+    /// the row to that search, which then finds what it always found. The ball is a little
+    /// wider than needed, for rounding; the test of each cell in it is [`widen`]'s own.
+    fn certified(&self, row: usize, tree: &LiftedTree, top: f64) -> bool {
+        let p = self.costs.points[row];
+        if !finite(p) {
+            return false;
+        }
+        let reach = self.u[row] + top;
+        let radius2 = reach + 1e-9 * (1.0 + reach.abs() + top.abs());
+        !(tree.locate_within_distance([p.x, p.y, 0.0], radius2))
+            .map(|c| c.data)
+            .chain(self.odd_cells.iter().copied())
+            .any(|col| self.violated(row, col))
+    }
+
+    /// Whether the pair's reduced cost is negative; rounding in the duals must not count as a
+    /// violation.
+    fn violated(&self, row: usize, col: usize) -> bool {
+        self.reduced(row, col) < -1e-9 * (1.0 + self.costs.get(row, col))
+    }
+
     /// Checks the dual certificate over all pairs. Every row with negative reduced costs gains
     /// its [`GAINED`] most negative columns as candidates, is freed, and has its price lowered
     /// so that all its candidates have reduced costs ≥ 0 again. Returns whether any row was.
     fn widen(&mut self) -> bool {
-        let tree = lifted_cells(self.costs.cells, &self.v);
+        let (tree, top) = lifted_cells(self.costs.cells, &self.v);
         let mut widened = false;
         for row in 0..self.costs.len() {
+            if self.certified(row, &tree, top) {
+                continue;
+            }
             let columns = columns_to_check(self.costs, &tree, &self.odd_cells, row, GAINED);
             let mut negative: Vec<(f64, usize)> = (columns.into_iter())
+                .filter(|&col| self.violated(row, col))
                 .map(|col| (self.reduced(row, col), col))
-                // Rounding in the duals must not count as a violation.
-                .filter(|&(r, col)| r < -1e-9 * (1.0 + self.costs.get(row, col)))
                 .collect();
             if negative.is_empty() {
                 continue;
@@ -540,18 +567,20 @@ fn finite(c: Coord<f64>) -> bool {
 
 /// The finite cells lifted to 3-d so that Euclidean nearness to a point (x, y, 0) orders them by
 /// squared distance minus price v_j, which is the reduced cost up to the row's own price: the
-/// cell at (x_j, y_j, sqrt(top − v_j)) is at squared distance |p − c_j|² + top − v_j.
-fn lifted_cells(cells: &[Coord<f64>], prices: &[f64]) -> LiftedTree {
+/// cell at (x_j, y_j, sqrt(top − v_j)) is at squared distance |p − c_j|² + top − v_j. Returns
+/// the tree and `top`.
+fn lifted_cells(cells: &[Coord<f64>], prices: &[f64]) -> (LiftedTree, f64) {
     let top = (cells.iter().zip(prices))
         .filter(|(c, _)| finite(**c))
         .map(|(_, &v)| v)
         .fold(f64::MIN, f64::max);
-    RTree::bulk_load(
+    let tree = RTree::bulk_load(
         (cells.iter().zip(prices).enumerate())
             .filter(|(_, (c, _))| finite(**c))
             .map(|(j, (c, &v))| GeomWithData::new([c.x, c.y, (top - v).sqrt()], j))
             .collect(),
-    )
+    );
+    (tree, top)
 }
 
 /// The columns of `row` worth looking at: its `count` best finite cells by reduced cost from

@@ -240,9 +240,10 @@ impl RingIndex {
             .fold(reach, f64::min)
     }
 
-    /// The nearest segment to `p`.
-    pub fn nearest(&self, p: Coord<f64>) -> Option<&Segment> {
-        self.tree.nearest_neighbor(&[p.x, p.y])
+    /// The nearest segment to `p`, and its distance (the same as [`RingIndex::distance`]'s
+    /// with nothing skipped, from a cheaper search).
+    pub fn nearest(&self, p: Coord<f64>) -> Option<(&Segment, f64)> {
+        (self.tree.nearest_neighbor(&[p.x, p.y])).map(|s| (s, s.distance_2(&[p.x, p.y]).sqrt()))
     }
 
     /// Whether two segments of the rings meet anywhere other than at the vertex that joins

@@ -301,11 +301,10 @@ impl Outlines {
         if self.own[part].contains(p) {
             return (0.0, false);
         }
-        let own = self.own[part].distance(p, |_| false);
+        let own = self.own[part].nearest(p).map_or(f64::INFINITY, |(_, d)| d);
         let elsewhere = self.all.contains(p)
-            || (self.all.nearest(p)).is_some_and(|s| {
-                self.part_of_ring[s.ring] != part && self.all.distance(p, |_| false) < own
-            });
+            || (self.all.nearest(p))
+                .is_some_and(|(s, d)| self.part_of_ring[s.ring] != part && d < own);
         (own, elsewhere)
     }
 }

@@ -957,7 +957,7 @@ fn move_inside(c: Coord<f64>, index: &RingIndex) -> Coord<f64> {
     if index.contains(c) {
         return c;
     }
-    let Some(segment) = index.nearest(c) else {
+    let Some((segment, _)) = index.nearest(c) else {
         return c;
     };
     let q = nearest_on_segment(c, segment.a, segment.b);
