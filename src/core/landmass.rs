@@ -301,10 +301,14 @@ impl Outlines {
         if self.own[part].contains(p) {
             return (0.0, false);
         }
-        let own = self.own[part].nearest(p).map_or(f64::INFINITY, |(_, d)| d);
+        let nearest = self.all.nearest(p);
+        // Where the nearest segment of all is the part's own, it is the part's nearest too.
+        let own = match nearest {
+            Some((s, d)) if self.part_of_ring[s.ring] == part => d,
+            _ => self.own[part].nearest(p).map_or(f64::INFINITY, |(_, d)| d),
+        };
         let elsewhere = self.all.contains(p)
-            || (self.all.nearest(p))
-                .is_some_and(|(s, d)| self.part_of_ring[s.ring] != part && d < own);
+            || nearest.is_some_and(|(s, d)| self.part_of_ring[s.ring] != part && d < own);
         (own, elsewhere)
     }
 }
