@@ -8,7 +8,8 @@ survive exactly; one Shapefile for non-UTF-8 text) and one manifest line:
 
 ("-" when there is no id field or nothing to check). tests/bad_inputs.rs and
 tests/c/test_bad_inputs.c run every line through the library, the command line and the C API.
-docs/robustness.md says why each case has the outcome it has.
+The comments beside each case here (and the `why` comments in cases.tsv) say why it has the
+outcome it has.
 
 Usage: /usr/bin/python3 scripts/make-bad-inputs.py   (needs python3-gdal, for the Shapefile)
 """
@@ -107,6 +108,17 @@ def main():
 
     geojson("lines.geojson", [feature("l1", "LineString", [[500000, 5000000], [501000, 5000000]])] + block(2, 1))
     case("lines.geojson", "invalid_input", "feature l1: the geometry is a LINESTRING")
+
+    # A region drawn in two parts as a collection (some tools write one): its polygons are the
+    # region. A collection that also holds a line is not a region.
+    halves = [square(502000, 5000000 + k * 500, 500) for k in range(2)]
+    parts = {"type": "GeometryCollection", "geometries": [{"type": "Polygon", "coordinates": h} for h in halves]}
+    geojson("collection.geojson", block(2, 1) + [dict(feature("parts", None, None), geometry=parts)])
+    case("collection.geojson", "ok", "-")
+    line = {"type": "LineString", "coordinates": [[502000, 5000000], [503000, 5001000]]}
+    mixed = {"type": "GeometryCollection", "geometries": [parts["geometries"][0], line]}
+    geojson("mixed_collection.geojson", block(2, 1) + [dict(feature("mixed", None, None), geometry=mixed)])
+    case("mixed_collection.geojson", "invalid_input", "feature mixed: the geometry is a GEOMETRYCOLLECTION that holds more than polygons")
 
     geojson("null_geometry.geojson", block(2, 2) + [feature("nothing", None, None)])
     case("null_geometry.geojson", "invalid_input", "feature nothing: the geometry is null")

@@ -1,11 +1,12 @@
 //! Well-Known Binary in and out, for callers that hand regions over as bytes (the C API) rather
 //! than as `geo` types. Parsing and writing are the georust `wkb` crate's; this module only
-//! decides what a region may be: a Polygon or a MultiPolygon, read in 2D (Z and M are dropped,
+//! decides what a region may be: a Polygon, a MultiPolygon or a GeometryCollection of them
+//! ([`crate::input::polygons_of`]), read in 2D (Z and M are dropped,
 //! as the method is planar).
 
-use crate::input::GeometryKind;
+use crate::input::{polygons_of, GeometryKind};
 use geo::{MultiPolygon, Polygon};
-use geo_traits::to_geo::{ToGeoMultiPolygon, ToGeoPolygon};
+use geo_traits::to_geo::{ToGeoGeometry, ToGeoMultiPolygon, ToGeoPolygon};
 use geo_traits::GeometryTrait;
 use wkb::reader::Wkb;
 use wkb::writer::{write_multi_polygon, write_polygon, WriteOptions};
@@ -29,8 +30,11 @@ pub fn to_multi_polygon(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
     match geometry.as_type() {
         geo_traits::GeometryType::Polygon(p) => Ok(MultiPolygon(vec![p.to_polygon()])),
         geo_traits::GeometryType::MultiPolygon(mp) => Ok(mp.to_multi_polygon()),
+        geo_traits::GeometryType::GeometryCollection(_) => (geometry.try_to_geometry())
+            .and_then(polygons_of)
+            .ok_or_else(|| "expected a GeometryCollection of polygons only".to_owned()),
         _ => Err(format!(
-            "expected a Polygon or MultiPolygon, got a {:?}",
+            "expected a Polygon, MultiPolygon or GeometryCollection of them, got a {:?}",
             geometry.geometry_type()
         )),
     }

@@ -3,6 +3,7 @@
 //! so a null id or a line among the polygons gets the same message everywhere.
 
 use super::Error;
+use geo::{Geometry, MultiPolygon};
 use std::collections::HashMap;
 
 /// What a reader found as a feature's geometry.
@@ -12,7 +13,8 @@ pub enum GeometryKind<'a> {
     Null,
     /// A geometry without points.
     Empty,
-    /// A polygon or multipolygon: what the method takes.
+    /// A polygon or multipolygon, or a collection of nothing else ([`polygons_of`]): what the
+    /// method takes.
     Polygonal,
     /// A curved geometry (its type name, e.g. "CURVEPOLYGON"), which must be linearised first.
     Curved(&'a str),
@@ -55,6 +57,9 @@ impl Admission {
                 "curved geometries ({name}) are not supported; linearise them first \
                  (ogr2ogr -nlt CONVERT_TO_LINEAR, or QGIS's Segmentize by maximum angle)"
             )),
+            GeometryKind::Other(name) if name.starts_with("GEOMETRYCOLLECTION") => Some(format!(
+                "the geometry is a {name} that holds more than polygons"
+            )),
             GeometryKind::Other(name) => Some(format!(
                 "the geometry is a {name}, not a polygon or multipolygon"
             )),
@@ -67,9 +72,60 @@ impl Admission {
     }
 }
 
+/// The polygons of a region's geometry: a polygon, a multipolygon, or a geometry collection
+/// that holds only those (at any depth), as some tools write a region drawn in parts; `None`
+/// for anything else. A collection's empty polygons are dropped; `None` when nothing is left.
+pub fn polygons_of(geometry: Geometry<f64>) -> Option<MultiPolygon<f64>> {
+    let polygons = match geometry {
+        Geometry::Polygon(p) => vec![p],
+        Geometry::MultiPolygon(m) => m.0,
+        Geometry::GeometryCollection(c) => {
+            let mut polygons = Vec::new();
+            for member in c.0 {
+                polygons.extend(polygons_of(member)?.0);
+            }
+            polygons.retain(|p| !p.exterior().0.is_empty());
+            if polygons.is_empty() {
+                return None;
+            }
+            polygons
+        }
+        _ => return None,
+    };
+    Some(MultiPolygon(polygons))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use geo::{wkt, GeometryCollection};
+
+    #[test]
+    fn a_collection_of_polygons_is_a_multipolygon_and_a_mixed_one_is_not() {
+        let a = wkt!(POLYGON((0. 0.,1. 0.,1. 1.,0. 0.)));
+        let b = wkt!(MULTIPOLYGON(((2. 0.,3. 0.,3. 1.,2. 0.)),((4. 0.,5. 0.,5. 1.,4. 0.))));
+        let nested = GeometryCollection(vec![
+            Geometry::Polygon(a.clone()),
+            Geometry::GeometryCollection(GeometryCollection(vec![Geometry::MultiPolygon(b)])),
+        ]);
+        // One polygon and, one level down, two: three (a hand count).
+        assert_eq!(
+            polygons_of(Geometry::GeometryCollection(nested))
+                .unwrap()
+                .0
+                .len(),
+            3
+        );
+        let mixed = GeometryCollection(vec![
+            Geometry::Polygon(a.clone()),
+            Geometry::LineString(wkt!(LINESTRING(0. 0.,1. 1.))),
+        ]);
+        assert_eq!(polygons_of(Geometry::GeometryCollection(mixed)), None);
+        let empty = GeometryCollection::<f64>(vec![]);
+        assert_eq!(polygons_of(Geometry::GeometryCollection(empty)), None);
+        assert_eq!(polygons_of(Geometry::Polygon(a)).unwrap().0.len(), 1);
+        assert_eq!(polygons_of(Geometry::Point(wkt!(POINT(0. 0.)))), None);
+    }
 
     #[test]
     fn every_refusal_names_the_feature() {

@@ -4,11 +4,11 @@
 use super::session::Session;
 use crate::core::{Error, Region};
 use crate::crs::LonLatBox;
-use crate::input::{Admission, GeometryKind};
+use crate::input::{polygons_of, Admission, GeometryKind};
 use gdal::spatial_ref::CoordTransform;
 use gdal::vector::{Feature, FieldValue, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
 use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
-use geo::{CoordsIter, MultiPolygon};
+use geo::CoordsIter;
 use std::path::Path;
 
 pub(crate) fn open(session: &Session, src: &str) -> Result<Dataset, Error> {
@@ -243,6 +243,11 @@ fn kind<'n>(geometry: Option<&Geometry>, name: &'n str) -> GeometryKind<'n> {
         OGRwkbGeometryType::wkbPolygon | OGRwkbGeometryType::wkbMultiPolygon => {
             GeometryKind::Polygonal
         }
+        OGRwkbGeometryType::wkbGeometryCollection
+            if geometry.to_geo().ok().and_then(polygons_of).is_some() =>
+        {
+            GeometryKind::Polygonal
+        }
         OGRwkbGeometryType::wkbCurvePolygon | OGRwkbGeometryType::wkbMultiSurface => {
             GeometryKind::Curved(name)
         }
@@ -295,16 +300,9 @@ pub(crate) fn regions(
                 }
                 None => &c.geometry,
             };
-            let geometry = match geometry.to_geo() {
-                Ok(geo::Geometry::Polygon(p)) => MultiPolygon(vec![p]),
-                Ok(geo::Geometry::MultiPolygon(m)) => m,
-                _ => {
-                    return Err(Error::input(
-                        Some(&c.id),
-                        "the geometry cannot be read as polygons",
-                    ))
-                }
-            };
+            let geometry = (geometry.to_geo().ok().and_then(polygons_of)).ok_or_else(|| {
+                Error::input(Some(&c.id), "the geometry cannot be read as polygons")
+            })?;
             if geometry
                 .coords_iter()
                 .any(|p| !(p.x.is_finite() && p.y.is_finite()))
