@@ -882,6 +882,26 @@ fn ids_a_shapefile_would_change_are_refused_before_the_layout() {
 }
 
 #[test]
+fn numeric_ids_survive_a_shapefile_that_writes_them_with_decimals() {
+    let scratch = Scratch::new("dbf-numbers");
+    let src = scratch.path("reals.geojson");
+    // Reals, one of them with a fraction: the DBF writes 15 decimals ("1.000000000000000").
+    let rows: Vec<String> = (0..8)
+        .map(|k| format!(r#""id":{}"#, k as f64 + if k == 7 { 0.5 } else { 1.0 }))
+        .collect();
+    squares(&src, &rows);
+    let shp = scratch.path("reals.shp");
+    assert_success(&snakegrid(["-q", "-id", "id", p(&shp), p(&src)]));
+    let dataset = Dataset::open(&shp).unwrap();
+    let mut layer = dataset.layer(0).unwrap();
+    let mut ids: Vec<f64> = (layer.features())
+        .map(|f| f.field_as_double(0).unwrap().unwrap())
+        .collect();
+    ids.sort_by(f64::total_cmp);
+    assert_eq!(ids, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 7.5]);
+}
+
+#[test]
 fn computed_fields_keep_their_names_and_colliding_source_fields_are_renamed() {
     let scratch = Scratch::new("collisions");
     let src = scratch.path("pins.geojson");

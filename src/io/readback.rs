@@ -5,7 +5,7 @@
 
 use super::session::Session;
 use crate::core::Error;
-use gdal::vector::{LayerAccess, OGRwkbGeometryType};
+use gdal::vector::{LayerAccess, OGRFieldType, OGRwkbGeometryType};
 use gdal::{Dataset, DatasetOptions, Driver, GdalOpenFlags, Metadata};
 use std::path::Path;
 
@@ -66,6 +66,7 @@ pub(crate) fn read_back(
         .or_else(|_| only())
         .map_err(|_| unreadable())?;
     let names: Vec<String> = layer.defn().fields().map(|f| f.name()).collect();
+    let types: Vec<u32> = layer.defn().fields().map(|f| f.field_type()).collect();
     // Every expected field, by its name, exact or else in another case (LIBKML reads `name`
     // back as its placemarks' `Name`, in its own place); a format may add fields (CSV's `WKT`).
     let mut found = Vec::with_capacity(expected.fields.len());
@@ -109,8 +110,12 @@ pub(crate) fn read_back(
             stored_ids.push(feature.field_as_string(found[position]).ok().flatten());
         }
     }
-    if let Some((_, ids)) = expected.ids {
-        compare_ids(driver, ids, &stored_ids)?;
+    if let Some((position, ids)) = expected.ids {
+        let numeric = matches!(
+            types[found[position]],
+            OGRFieldType::OFTInteger | OGRFieldType::OFTInteger64 | OGRFieldType::OFTReal
+        );
+        compare_ids(driver, ids, &stored_ids, numeric)?;
     }
     if count != expected.features {
         return Err(Error::Io(format!(
@@ -124,13 +129,27 @@ pub(crate) fn read_back(
 /// Refuses the first id of `ids` that `stored` (the ids read back) does not hold as it is. A
 /// format may store the features in another order (FlatGeobuf sorts them along its spatial
 /// index); what it stored in the place of a missing id is the best guess of what became of it.
-fn compare_ids(driver: &str, ids: &[&str], stored: &[Option<String>]) -> Result<(), Error> {
+/// In a `numeric` field an id is its number: a Shapefile writes a real 1 as
+/// "1.000000000000000", which still names the region.
+fn compare_ids(
+    driver: &str,
+    ids: &[&str],
+    stored: &[Option<String>],
+    numeric: bool,
+) -> Result<(), Error> {
+    let key = |id: &str| -> String {
+        match id.trim().parse::<f64>() {
+            Ok(number) if numeric && number.is_finite() => number.to_string(),
+            _ => id.to_owned(),
+        }
+    };
     let stored: Vec<Option<&str>> = stored.iter().map(Option::as_deref).collect();
-    if stored.len() == ids.len() && stored.iter().zip(ids).all(|(s, id)| *s == Some(*id)) {
+    let same = |s: Option<&str>, id: &str| s.is_some_and(|s| s == id || key(s) == key(id));
+    if stored.len() == ids.len() && stored.iter().zip(ids).all(|(s, id)| same(*s, id)) {
         return Ok(());
     }
-    let mut sorted_ids = ids.to_vec();
-    let mut sorted_stored: Vec<&str> = stored.iter().flatten().copied().collect();
+    let mut sorted_ids: Vec<String> = ids.iter().map(|id| key(id)).collect();
+    let mut sorted_stored: Vec<String> = stored.iter().flatten().map(|s| key(s)).collect();
     sorted_ids.sort_unstable();
     sorted_stored.sort_unstable();
     if sorted_ids == sorted_stored {
@@ -138,7 +157,7 @@ fn compare_ids(driver: &str, ids: &[&str], stored: &[Option<String>]) -> Result<
     }
     let missing = ids
         .iter()
-        .position(|id| sorted_stored.binary_search(id).is_err())
+        .position(|id| sorted_stored.binary_search(&key(id)).is_err())
         .unwrap_or(0);
     let id = ids.get(missing).copied().unwrap_or_default();
     let instead = stored.get(missing).copied().flatten().filter(|s| *s != id);
@@ -174,16 +193,36 @@ mod tests {
     #[test]
     fn ids_may_come_back_in_another_order_but_not_changed() {
         let some = |v: &[&str]| v.iter().map(|s| Some(s.to_string())).collect::<Vec<_>>();
-        assert!(compare_ids("FlatGeobuf", &["a", "b", "c"], &some(&["c", "a", "b"])).is_ok());
-        let error = compare_ids("ESRI Shapefile", &["a", "a  "], &some(&["a", "a"])).unwrap_err();
+        assert!(compare_ids(
+            "FlatGeobuf",
+            &["a", "b", "c"],
+            &some(&["c", "a", "b"]),
+            false
+        )
+        .is_ok());
+        let error =
+            compare_ids("ESRI Shapefile", &["a", "a  "], &some(&["a", "a"]), false).unwrap_err();
         assert_eq!(
             error.to_string(),
             "feature a  : the ESRI Shapefile output drops trailing spaces, so the id would be \
              stored as \"a\", which no longer names this region; choose another -id field or \
              output format"
         );
-        let error = compare_ids("GPKG", &["a", "b"], &some(&["a"])).unwrap_err();
+        let error = compare_ids("GPKG", &["a", "b"], &some(&["a"]), false).unwrap_err();
         assert!(error.to_string().starts_with("feature b: "), "{error}");
+    }
+
+    #[test]
+    fn a_number_is_the_same_id_however_the_format_writes_it() {
+        let some = |v: &[&str]| v.iter().map(|s| Some(s.to_string())).collect::<Vec<_>>();
+        // A Shapefile's real field: 15 decimals.
+        let dbf = some(&["1.000000000000000", "2.500000000000000"]);
+        assert!(compare_ids("ESRI Shapefile", &["1", "2.5"], &dbf, true).is_ok());
+        // The same digits in a text field are another id.
+        assert!(compare_ids("ESRI Shapefile", &["1", "2.5"], &dbf, false).is_err());
+        // A number that changed is refused, in a numeric field too.
+        let error = compare_ids("ESRI Shapefile", &["1", "3"], &dbf, true).unwrap_err();
+        assert!(error.to_string().starts_with("feature 3: "), "{error}");
     }
 
     #[test]
