@@ -281,6 +281,53 @@ fn a_missing_layer_fails_and_lists_the_layers() {
 }
 
 #[test]
+fn of_several_layers_the_first_is_laid_out_and_the_others_are_named() {
+    let scratch = Scratch::new("several-layers");
+    let src = scratch.input("us_states");
+    // Two layers in one GeoPackage: the US states' grid map, twice.
+    let both = scratch.path("both.gpkg");
+    assert_success(&snakegrid([
+        "-q",
+        "-id",
+        "id",
+        "-nln",
+        "first",
+        p(&both),
+        p(&src),
+    ]));
+    let again = [
+        "-q",
+        "-id",
+        "id",
+        "-update",
+        "-nln",
+        "second",
+        p(&both),
+        p(&src),
+    ];
+    assert_success(&snakegrid(again));
+    let output = snakegrid(["-id", "id", p(&scratch.path("out.gpkg")), p(&both)]);
+    assert_success(&output);
+    assert!(
+        stdout(&output).contains(
+            "note: the source has 2 layers (first, second): laid out the first, \"first\""
+        ),
+        "{}",
+        stdout(&output)
+    );
+    // Named, no note.
+    let named = snakegrid([
+        "-id",
+        "id",
+        p(&scratch.path("out2.gpkg")),
+        p(&both),
+        "second",
+    ]);
+    assert_success(&named);
+    assert!(!stdout(&named).contains("layers ("), "{}", stdout(&named));
+}
+
+#[test]
 fn a_bad_id_field_fails_and_lists_the_fields() {
     let scratch = Scratch::new("bad-id");
     let src = scratch.input("us_states");

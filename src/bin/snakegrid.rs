@@ -28,7 +28,7 @@ struct Cli {
     /// Source dataset: file, folder or connection string
     #[arg(value_name = "SRC")]
     src: String,
-    /// Source layer [default: the first layer]
+    /// Source layer [default: the first layer, with a note naming the others]
     #[arg(value_name = "SRC_LAYER")]
     src_layer: Option<String>,
     /// Output format, a GDAL vector driver short name [default: from DST's extension (refused if no driver writes it); GPKG without one]

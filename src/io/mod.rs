@@ -114,7 +114,7 @@ fn run_in(
         .file_name()
         .ok_or_else(|| Error::Io(format!("the destination {:?} is not a file name", job.dst)))?;
 
-    let mut layer = read::layer(&dataset, job.src_layer.as_deref())?;
+    let (mut layer, layer_note) = read::layer(&dataset, job.src_layer.as_deref())?;
     let source_layer = layer.name();
     let layer_name = job
         .layer_name
@@ -168,6 +168,7 @@ fn run_in(
         .chain(&hexjson_destination);
     let folders: BTreeSet<PathBuf> = all.map(|d| staging::folder_of(&d.path)).collect();
     let mut notes: Vec<String> = folders.iter().flat_map(|f| staging::sweep(f)).collect();
+    notes.extend(layer_note);
     let dst_staging = Staging::new(&destination.path, "destination")?;
     let stage = |d: Option<Destination>, what| {
         d.map(|d| Staging::new(&d.path, what).map(|s| (d, s)))
@@ -435,12 +436,12 @@ pub struct SourceRegions {
 pub fn read_regions(job: &Job) -> Result<SourceRegions, Error> {
     let session = Session::start();
     let dataset = read::open(&session, &job.src)?;
-    let mut layer = read::layer(&dataset, job.src_layer.as_deref())?;
+    let (mut layer, layer_note) = read::layer(&dataset, job.src_layer.as_deref())?;
     let source = Source::read(&session, job, &mut layer)?;
     Ok(SourceRegions {
         regions: source.regions,
         labels: source.labels,
-        notes: source.notes,
+        notes: layer_note.into_iter().chain(source.notes).collect(),
     })
 }
 

@@ -31,8 +31,12 @@ pub(crate) fn open(session: &Session, src: &str) -> Result<Dataset, Error> {
     })
 }
 
-/// The named layer, or the first.
-pub(crate) fn layer<'d>(dataset: &'d Dataset, name: Option<&str>) -> Result<Layer<'d>, Error> {
+/// The named layer, or the first, with a note when the first was taken from several: GDAL's
+/// tools would take them all, and the user may have meant another.
+pub(crate) fn layer<'d>(
+    dataset: &'d Dataset,
+    name: Option<&str>,
+) -> Result<(Layer<'d>, Option<String>), Error> {
     let names = || {
         let all: Vec<String> = dataset.layers().map(|l| l.name()).collect();
         if all.is_empty() {
@@ -64,7 +68,16 @@ pub(crate) fn layer<'d>(dataset: &'d Dataset, name: Option<&str>) -> Result<Laye
             ),
         ));
     }
-    Ok(layer)
+    let note = (name.is_none() && dataset.layer_count() > 1).then(|| {
+        format!(
+            "the source has {} layers ({}): laid out the first, {:?}; name another after the \
+             source to lay it out instead",
+            dataset.layer_count(),
+            names().trim_start_matches("its layers: "),
+            layer.name()
+        )
+    });
+    Ok((layer, note))
 }
 
 /// The index of field `name` (exact, else the only case-insensitive match).
