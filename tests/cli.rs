@@ -328,6 +328,28 @@ fn of_several_layers_the_first_is_laid_out_and_the_others_are_named() {
 }
 
 #[test]
+fn a_mercator_source_is_laid_out_as_drawn_with_a_note() {
+    let scratch = Scratch::new("mercator");
+    let src = scratch.input("us_states");
+    // The US states' grid map in Web Mercator, as a source.
+    let web = scratch.path("web.gpkg");
+    let to_web = ["-q", "-id", "id", "-t_srs", "EPSG:3857", p(&web), p(&src)];
+    assert_success(&snakegrid(to_web));
+    let output = snakegrid(["-id", "id", p(&scratch.path("out.gpkg")), p(&web)]);
+    assert_success(&output);
+    assert!(
+        stdout(&output).contains(
+            "note: the source CRS EPSG:3857 (WGS 84 / Pseudo-Mercator) is a Mercator projection"
+        ),
+        "{}",
+        stdout(&output)
+    );
+    // An equal-area source gets no such note.
+    let plain = snakegrid(["-id", "id", p(&scratch.path("out2.gpkg")), p(&src)]);
+    assert!(!stdout(&plain).contains("Mercator"), "{}", stdout(&plain));
+}
+
+#[test]
 fn a_bad_id_field_fails_and_lists_the_fields() {
     let scratch = Scratch::new("bad-id");
     let src = scratch.input("us_states");

@@ -35,6 +35,25 @@ pub struct WorkingCrs {
     pub note: String,
 }
 
+/// What the user should know about laying a layer out in its own projected CRS `crs` (a name
+/// for messages), whose projection method GDAL calls `method`: a Mercator projection (Web
+/// Mercator's too) inflates areas towards the poles, by 1/cos² of the latitude, and the
+/// regions' areas set the cell size and the landmasses' budgets (method.md §3, §6). `None`
+/// for other projections; a transverse or oblique Mercator (UTM, say) stays true near its line.
+pub fn projected_note(method: &str, crs: &str) -> Option<String> {
+    let method = method.to_ascii_lowercase();
+    let cylindrical_mercator = method.contains("mercator")
+        && !method.contains("transverse")
+        && !method.contains("oblique");
+    cylindrical_mercator.then(|| {
+        format!(
+            "the source CRS {crs} is a Mercator projection, which draws areas larger towards the \
+             poles (twice at 45°, four times at 60°): the regions are weighed as drawn; give \
+             -t_srs an equal-area CRS (EPSG:8857 for the world) to weigh them as they are"
+        )
+    })
+}
+
 /// Longitude spans (the antimeridian-aware range) above this get a world projection.
 const WORLD_SPAN: f64 = 180.0;
 
@@ -239,6 +258,18 @@ mod tests {
         ]))
         .unwrap();
         assert!(crs.name.contains("179.5E"), "{}", crs.name);
+    }
+
+    #[test]
+    fn only_a_cylindrical_mercator_gets_a_note() {
+        // GDAL's WKT1 names for EPSG:3857, EPSG:3395 and a UTM zone, and an equal-area CRS.
+        let web = projected_note("Mercator_1SP", "EPSG:3857").unwrap();
+        assert!(web.contains("EPSG:3857") && web.contains("-t_srs"), "{web}");
+        assert!(projected_note("Mercator_2SP", "EPSG:3395").is_some());
+        assert!(projected_note("Popular Visualisation Pseudo Mercator", "x").is_some());
+        assert_eq!(projected_note("Transverse_Mercator", "EPSG:32633"), None);
+        assert_eq!(projected_note("Hotine_Oblique_Mercator", "x"), None);
+        assert_eq!(projected_note("Albers_Conic_Equal_Area", "EPSG:5070"), None);
     }
 
     #[test]

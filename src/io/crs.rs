@@ -84,10 +84,11 @@ pub(crate) fn plan(
         }
         (Some(source), None) => {
             refuse_geocentric(source)?;
+            let method = source.get_attr_value("PROJECTION", 0).ok().flatten();
             Ok(Plan {
                 working: Some(source.clone()),
                 transform: None,
-                note: None,
+                note: method.and_then(|m| crate::crs::projected_note(&m, &describe(source))),
             })
         }
     }
