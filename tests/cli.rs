@@ -350,6 +350,38 @@ fn a_mercator_source_is_laid_out_as_drawn_with_a_note() {
 }
 
 #[test]
+fn a_source_without_a_crs_is_planar_and_degrees_are_pointed_out() {
+    let scratch = Scratch::new("no-crs");
+    let src = scratch.input("us_states");
+    // Grid maps of the US states as Shapefiles without their .prj: in metres and in degrees.
+    for (name, srs, degrees) in [
+        ("metres", "EPSG:5070", false),
+        ("degrees", "EPSG:4326", true),
+    ] {
+        let shp = scratch.path(&format!("{name}.shp"));
+        assert_success(&snakegrid([
+            "-q",
+            "-id",
+            "id",
+            "-t_srs",
+            srs,
+            p(&shp),
+            p(&src),
+        ]));
+        std::fs::remove_file(scratch.path(&format!("{name}.prj"))).unwrap();
+        let out = scratch.path(&format!("{name}.gpkg"));
+        let output = snakegrid(["-id", "id", p(&out), p(&shp)]);
+        assert_success(&output);
+        let text = stdout(&output);
+        assert!(
+            text.contains("the source has no CRS: its coordinates are taken as planar"),
+            "{text}"
+        );
+        assert_eq!(text.contains("-s_srs EPSG:4326"), degrees, "{name}: {text}");
+    }
+}
+
+#[test]
 fn a_bad_id_field_fails_and_lists_the_fields() {
     let scratch = Scratch::new("bad-id");
     let src = scratch.input("us_states");

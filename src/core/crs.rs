@@ -54,6 +54,24 @@ pub fn projected_note(method: &str, crs: &str) -> Option<String> {
     })
 }
 
+/// Whether a layer without a CRS, whose regions have the extents `boxes`, could be in degrees:
+/// every coordinate within ±180 and ±90 and the layer wider than a hundredth of a degree (a
+/// planar layer drawn in units of a few metres near its origin would fit too).
+pub fn looks_like_degrees(boxes: &[LonLatBox]) -> bool {
+    let (mut west, mut south, mut east, mut north) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+    for b in boxes {
+        west = west.min(b.west);
+        south = south.min(b.south);
+        east = east.max(b.east);
+        north = north.max(b.north);
+    }
+    (-180.0..=180.0).contains(&west)
+        && (-180.0..=180.0).contains(&east)
+        && (-90.0..=90.0).contains(&south)
+        && (-90.0..=90.0).contains(&north)
+        && (east - west).max(north - south) > 0.01
+}
+
 /// Longitude spans (the antimeridian-aware range) above this get a world projection.
 const WORLD_SPAN: f64 = 180.0;
 
@@ -258,6 +276,19 @@ mod tests {
         ]))
         .unwrap();
         assert!(crs.name.contains("179.5E"), "{}", crs.name);
+    }
+
+    #[test]
+    fn coordinates_within_the_globe_look_like_degrees() {
+        assert!(looks_like_degrees(&boxes(&[(-17.0, -35.0, 51.0, 37.0)])));
+        // Metres; then a y beyond ±90.
+        assert!(!looks_like_degrees(&boxes(&[(
+            500000.0, 5000000.0, 503000.0, 5001000.0
+        )])));
+        assert!(!looks_like_degrees(&boxes(&[(
+            -100.0, -120.0, 100.0, 80.0
+        )])));
+        assert!(!looks_like_degrees(&boxes(&[])));
     }
 
     #[test]

@@ -32,17 +32,26 @@ pub(crate) fn plan(
         .filter(|name| name.starts_with("Undefined") && name.ends_with("SRS"));
     let source = source.filter(|_| placeholder.is_none());
     match (source, target) {
-        (None, None) => Ok(Plan {
-            working: None,
-            transform: None,
-            note: Some(match placeholder {
+        (None, None) => {
+            let mut note = match placeholder {
                 Some(name) => format!(
                     "the source has no CRS (only the placeholder {name:?}): its coordinates \
                      are taken as planar"
                 ),
                 None => "the source has no CRS: its coordinates are taken as planar".into(),
-            }),
-        }),
+            };
+            if crate::crs::looks_like_degrees(&boxes()) {
+                note.push_str(
+                    "; they lie within ±180 and ±90, as longitudes and latitudes would: if they \
+                     are, -s_srs EPSG:4326 (or their own geographic CRS) projects them",
+                );
+            }
+            Ok(Plan {
+                working: None,
+                transform: None,
+                note: Some(note),
+            })
+        }
         (None, Some(target)) => Err(Error::InvalidInput {
             feature: None,
             message: format!("the source has no CRS, so it cannot be projected to -t_srs {target}"),
