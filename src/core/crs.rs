@@ -55,8 +55,8 @@ pub fn projected_note(method: &str, crs: &str) -> Option<String> {
 }
 
 /// Whether a layer without a CRS, whose regions have the extents `boxes`, could be in degrees:
-/// every coordinate within ±180 and ±90 and the layer wider than a hundredth of a degree (a
-/// planar layer drawn in units of a few metres near its origin would fit too).
+/// every coordinate within ±180 and ±90, and the layer wider than a hundredth of a degree (a
+/// layer smaller than a kilometre across is more likely a plan in its own units).
 pub fn looks_like_degrees(boxes: &[LonLatBox]) -> bool {
     let (mut west, mut south, mut east, mut north) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
     for b in boxes {

@@ -74,7 +74,8 @@ pub unsafe extern "C" fn snakegrid_regions_free(regions: *mut Regions) {
 
 /// Adds one region: a unique, non-empty UTF-8 `id` and its geometry as `wkb_len` bytes of WKB,
 /// a Polygon, a MultiPolygon or a GeometryCollection of only those, in either byte order (ISO
-/// or EWKB; Z and M are ignored). The bytes are copied; the caller keeps ownership of `id` and `wkb`.
+/// or EWKB; Z and M are ignored). The bytes are copied; the caller keeps ownership of `id` and
+/// `wkb`.
 ///
 /// Fails with SNAKEGRID_INVALID_INPUT, naming the region, for malformed WKB or another geometry
 /// type; the handle is then unchanged. The regions as a whole (unique ids, geometries with
@@ -111,9 +112,9 @@ pub unsafe extern "C" fn snakegrid_regions_add(
 /// `feature` names it until its id is known (e.g. "FID 3"), `id` is its id (NULL: a null id),
 /// `wkb` its geometry as `wkb_len` bytes (NULL: a null geometry). A null or empty id, an id
 /// already added by this function, and a geometry that is not a (non-empty) Polygon,
-/// MultiPolygon or GeometryCollection of them are refused with SNAKEGRID_INVALID_INPUT and the command line's message, e.g.
-/// "feature FID 3: the id is null" or "feature p1: the geometry is a POINT, not a polygon or
-/// multipolygon"; the handle is then unchanged. Hosts that read layers themselves (QGIS,
+/// MultiPolygon or GeometryCollection of them are refused with SNAKEGRID_INVALID_INPUT and the
+/// command line's message, e.g. "feature FID 3: the id is null" or "feature p1: the geometry is
+/// a POINT, not a polygon or multipolygon"; the handle is then unchanged. Hosts that read layers themselves (QGIS,
 /// Python) use this so that users see what the command line would say.
 ///
 /// Thread safety: not concurrently with any other use of the same handle.
