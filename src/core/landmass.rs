@@ -26,6 +26,7 @@ use super::tiling::{Position, Tiling};
 use super::Params;
 use geo::{BoundingRect, Coord, MultiPolygon};
 use rustc_hash::{FxHashMap, FxHashSet};
+use std::cell::OnceCell;
 
 /// The cells the layout may use, tagged with their part: the first `demands.iter().sum()` are
 /// the cells to assign (each part's k; the fixed cells first), the rest the refinement's pool.
@@ -62,7 +63,7 @@ pub fn select(
         open[cell.part] = open[cell.part].saturating_sub(1);
     }
     // Indexed only if a part falls short, and then once for both picks.
-    let outlines = std::cell::OnceCell::new();
+    let outlines = OnceCell::new();
     let mut assigned = fixed.to_vec();
     assigned.extend(pick(lattice, parts, &outlines, &scored, &open, &mut taken));
     let extra: Vec<usize> = demands
@@ -84,7 +85,7 @@ pub fn select(
 fn pick(
     lattice: &Lattice,
     parts: &[MultiPolygon<f64>],
-    outlines: &std::cell::OnceCell<Outlines>,
+    outlines: &OnceCell<Outlines>,
     scored: &[LatticeCell],
     wanted: &[usize],
     taken: &mut FxHashMap<Position, usize>,
@@ -510,6 +511,10 @@ pub fn settle(
     let mut assigned: FxHashMap<Position, usize> = (cells.iter())
         .map(|&k| (position(&lattice.cells[k]), lattice.cells[k].part))
         .collect();
+    // The layout's holes, counted when a shift needs them and kept until a block moves: a
+    // crowd of islands beside a mainland asked for them at every one (a thousand islands: nine
+    // tenths of the run).
+    let mut holes = OnceCell::new();
     for _ in 0..SETTLE_ROUNDS {
         let mut all = FitSums::of((0..cells.len()).map(|i| block.fit_term(lattice, i)));
         let mut moved = false;
@@ -522,10 +527,16 @@ pub fn settle(
                 assigned: &assigned,
                 all: &all,
                 own: &own,
+                holes: &holes,
             };
-            let Some(shift) = block.best_shift(lattice, part, regions, &board) else {
+            let Some((shift, holes_after)) = block.best_shift(lattice, part, regions, &board)
+            else {
                 continue;
             };
+            holes = OnceCell::new();
+            if let Some(count) = holes_after {
+                let _ = holes.set(count);
+            }
             let moving = &members[part];
             for &k in moving {
                 taken.remove(&position(&lattice.cells[k]));
@@ -563,6 +574,8 @@ struct Board<'a> {
     /// The fit's sums over all regions, and over the block's.
     all: &'a FitSums,
     own: &'a FitSums,
+    /// The layout's holes as it stands, once counted: they change only when a block moves.
+    holes: &'a OnceCell<u32>,
 }
 
 /// What [`settle`] weighs a block's shift with.
@@ -656,13 +669,15 @@ impl Block<'_> {
     }
 
     /// The shift [`settle`] gives the block of `part` (holding `regions`), or `None` to stay.
+    /// The shift `part`'s block takes (see [`settle`]), and the layout's holes after it when
+    /// they were counted.
     fn best_shift(
         &self,
         lattice: &Lattice,
         part: usize,
         regions: &[usize],
         board: &Board,
-    ) -> Option<Position> {
+    ) -> Option<(Position, Option<u32>)> {
         let size = lattice.cell_size;
         let at = |region: usize| {
             let cell = &lattice.cells[self.cells[region]];
@@ -765,19 +780,25 @@ impl Block<'_> {
                 })
                 .collect()
         };
-        let holes = std::cell::OnceCell::new();
-        shifts.into_iter().map(|(_, shift)| shift).find(|&shift| {
+        let holes_of = |shift: Position| LayoutShape::holes_of(&layout(shift), lattice.tiling);
+        let mut after = None;
+        let shift = shifts.into_iter().map(|(_, shift)| shift).find(|&shift| {
+            after = None;
             let free = (block.iter()).all(|&(c, r)| {
                 (board.taken.get(&(c + shift.0, r + shift.1))).is_none_or(|&p| p == part)
             });
             let apart = !joins(shift) || joins((0, 0));
-            free && apart
-                && (!(touches((0, 0)) || touches(shift))
-                    || LayoutShape::of(&layout(shift), lattice.tiling).holes()
-                        <= *holes.get_or_init(|| {
-                            LayoutShape::of(&layout((0, 0)), lattice.tiling).holes()
-                        }))
-        })
+            if !(free && apart) {
+                return false;
+            }
+            if !(touches((0, 0)) || touches(shift)) {
+                return true;
+            }
+            let holes = holes_of(shift);
+            after = Some(holes);
+            holes <= *board.holes.get_or_init(|| holes_of((0, 0)))
+        })?;
+        Some((shift, after))
     }
 }
 

@@ -439,19 +439,31 @@ impl LayoutShape {
     pub(crate) fn of(cells: &[Position], tiling: Tiling) -> LayoutShape {
         let occupied: HashSet<Position> = cells.iter().copied().collect();
         let pieces = pieces(cells, &occupied, tiling);
-        let holes: f64 = pieces
-            .iter()
-            .flat_map(|piece| boundary_loops(piece, tiling))
-            .map(|ring| ring_area(&ring) / tiling.cell_area_in_corner_units())
-            .filter(|&area| area < 0.0)
-            .map(f64::abs)
-            .sum();
         LayoutShape {
+            holes: hole_area(&pieces, tiling),
             pieces,
-            holes: holes.round() as u32,
             notches: notches(cells, &occupied, tiling),
         }
     }
+
+    /// [`LayoutShape::holes`] of `cells` alone, for a caller that asks it often (the landmass
+    /// blocks' settling): the notches are not counted.
+    pub(crate) fn holes_of(cells: &[Position], tiling: Tiling) -> u32 {
+        let occupied: HashSet<Position> = cells.iter().copied().collect();
+        hole_area(&pieces(cells, &occupied, tiling), tiling)
+    }
+}
+
+/// The area of the pieces' inner rings, in cells.
+fn hole_area(pieces: &[HashSet<Position>], tiling: Tiling) -> u32 {
+    let holes: f64 = pieces
+        .iter()
+        .flat_map(|piece| boundary_loops(piece, tiling))
+        .map(|ring| ring_area(&ring) / tiling.cell_area_in_corner_units())
+        .filter(|&area| area < 0.0)
+        .map(f64::abs)
+        .sum();
+    holes.round() as u32
 }
 
 /// How many times the landmasses' blocks break: over the landmasses (`part[i]` is cell `i`'s),
