@@ -129,10 +129,20 @@ def archipelago(n, count, seed):
         geometries.append(cell)
     radius = SIDE * 0.3 / math.sqrt(n) / 2  # half a mainland region's size
     placed = [land.buffer(2 * radius)]
+    # Islands sized after a mainland of few regions fill the square after a few dozen; a
+    # thousand draws in a row with no room mean it is full.
+    misses = 0
     while len(ids) < n + count:
+        if misses > 1000:
+            sys.exit(
+                f"archipelago: only {len(ids) - n} of {count} islands, each half the size of one "
+                f"of {n} mainland regions, fit around it; ask for fewer islands or more regions"
+            )
+        misses += 1
         p = shapely.Point(rng.uniform(0, SIDE), rng.uniform(0, SIDE))
         island = p.buffer(radius, quad_segs=8)
         if not any(g.intersects(island.buffer(radius)) for g in placed):
+            misses = 0
             placed.append(island)
             ids.append(f"i{len(ids) - n}")
             geometries.append(island)
