@@ -37,8 +37,9 @@ pub(crate) fn layer<'d>(
     dataset: &'d Dataset,
     name: Option<&str>,
 ) -> Result<(Layer<'d>, Option<String>), Error> {
+    let all = || dataset.layers().map(|l| l.name()).collect::<Vec<String>>();
     let names = || {
-        let all: Vec<String> = dataset.layers().map(|l| l.name()).collect();
+        let all = all();
         if all.is_empty() {
             "it has no layers".to_owned()
         } else {
@@ -73,7 +74,7 @@ pub(crate) fn layer<'d>(
             "the source has {} layers ({}): laid out the first, {:?}; name another after the \
              source to lay it out instead",
             dataset.layer_count(),
-            names().trim_start_matches("its layers: "),
+            all().join(", "),
             layer.name()
         )
     });
