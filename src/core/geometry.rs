@@ -240,6 +240,12 @@ impl RingIndex {
             .fold(reach, f64::min)
     }
 
+    /// The segments within `reach` of `p` (at `reach` too), each with its squared distance.
+    pub fn within(&self, p: Coord<f64>, reach: f64) -> impl Iterator<Item = (&Segment, f64)> {
+        (self.tree.locate_within_distance([p.x, p.y], reach * reach))
+            .map(move |s| (s, s.distance_2(&[p.x, p.y])))
+    }
+
     /// The nearest segment to `p`, and its distance (the same as [`RingIndex::distance`]'s
     /// with nothing skipped, from a cheaper search).
     pub fn nearest(&self, p: Coord<f64>) -> Option<(&Segment, f64)> {
