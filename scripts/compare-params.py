@@ -47,6 +47,8 @@ METRICS = [
     ("adjacency_kept_queen", "adj", 1),
     ("orientation_deg", "orient °", -1),
     ("location_cells", "location", -1),
+    ("location_p90_cells", "loc p90", -1),
+    ("location_max_cells", "loc max", -1),
     ("shape_fd", "shape", 1),
     ("gap_cells", "notches", -1),
     ("components_cells", "pieces", -1),

@@ -73,12 +73,13 @@ pub fn refine(
         return Some(Vec::new());
     }
     let links = Links::of(layout);
-    let problem = Problem::new(layout, params, &links);
+    let far = far_from_home(layout, cells, params);
+    let problem = Problem::new(layout, params, &links, &far);
     let stripes = stripe_count(cells.len());
     let best = if stripes == 1 {
         anneal(&problem, cells, params, seed, tick)?.0
     } else {
-        anneal_in_stripes(layout, &links, cells, params, seed, stripes, tick)?
+        anneal_in_stripes(layout, &links, &far, cells, params, seed, stripes, tick)?
     };
     // The search tracks its energy as a sum of many deltas; comparing exact totals makes the
     // promise never to return a worse state hold even to the last bit.
@@ -135,6 +136,25 @@ const PUSHES: f64 = 0.25;
 /// The refinement's moves for `regions` regions: `refine_moves_per_region` each.
 fn moves(params: &Params, regions: usize) -> usize {
     params.refine_moves_per_region.saturating_mul(regions)
+}
+
+/// Per region, the distance from its place beyond which its cost grows with the square again:
+/// where it starts, and at least `refine_location_far` cells. Beyond `refine_location_knee` the
+/// cost grows only linearly, so that a region may move a little for its neighbours; without a
+/// limit, a region with few neighbours (Kuwait, Palestine on the world map) was sent five cells
+/// off to make room for others. A region that starts far (the US counties of the crowded east
+/// spread west, 5 cells on average) is held only from going farther: a fixed limit pulled the
+/// whole tail back in and broke the outline (shape 0.930 → 0.892).
+fn far_from_home(layout: &Layout, cells: &[usize], params: &Params) -> Vec<f64> {
+    let lattice = layout.lattice;
+    (cells.iter().zip(layout.targets))
+        .map(|(&k, &target)| {
+            let centre = lattice.centre(lattice.cells[k].col, lattice.cells[k].row);
+            let d = target - centre;
+            let start = (d.x * d.x + d.y * d.y).sqrt() / lattice.cell_size;
+            start.max(params.refine_location_far)
+        })
+        .collect()
 }
 
 /// Runs the annealing from `cells` over the whole board and returns the best state seen and its
@@ -332,9 +352,11 @@ impl Stripes {
 /// and keeping each stripe's best state. A region is frozen for a phase when its cell lies in a
 /// band or a neighbour's cell lies in another stripe, so that no pair term is shared. The result
 /// depends on the seed and the input, not on the threads.
+#[allow(clippy::too_many_arguments)]
 fn anneal_in_stripes(
     layout: &Layout,
     links: &Links,
+    far: &[f64],
     cells: &[usize],
     params: &Params,
     seed: u64,
@@ -350,7 +372,7 @@ fn anneal_in_stripes(
     for phase in 0..PHASES {
         let positions: Vec<Position> = at.iter().map(|&k| position(k)).collect();
         let split = Stripes::of(phase, stripes, &positions);
-        let problem = Problem::new(layout, params, links);
+        let problem = Problem::new(layout, params, links, far);
         let owner: Vec<Option<usize>> = (0..n)
             .map(|region| {
                 let stripe = split.owner(positions[region])?;
@@ -390,7 +412,7 @@ fn anneal_in_stripes(
                     temperature: params.refine_temperature,
                 };
                 let weight = moves as f64 / total as f64 / PHASES as f64;
-                let problem = Problem::new(layout, params, links);
+                let problem = Problem::new(layout, params, links, far);
                 let (best, _) =
                     search.run(&problem, board.clone(), terms.clone(), 0.0, &|share| {
                         tick(share * weight)
@@ -512,6 +534,9 @@ struct Problem<'a> {
     w_location: f64,
     /// `refine_location_knee`, in cells.
     location_knee: f64,
+    /// Per region, where the square comes back ([`far_from_home`]), in cells; and `refine_w_far`.
+    location_far: &'a [f64],
+    w_far: f64,
     w_landmass: f64,
     w_notch: f64,
     links: &'a [(usize, Coord<f64>)],
@@ -522,12 +547,16 @@ struct Problem<'a> {
 }
 
 impl<'a> Problem<'a> {
-    fn new(layout: &'a Layout<'a>, params: &Params, links: &'a Links) -> Self {
+    /// The problem of refining `layout`, a region's distance costing more with the square
+    /// beyond `far` cells ([`far_from_home`]).
+    fn new(layout: &'a Layout<'a>, params: &Params, links: &'a Links, far: &'a [f64]) -> Self {
         Problem {
             layout,
             pairs: PairWeights::of(params),
             w_location: params.refine_w_location,
             location_knee: params.refine_location_knee,
+            location_far: far,
+            w_far: params.refine_w_far,
             w_landmass: params.refine_w_landmass,
             w_notch: params.refine_w_notch,
             links: &links.links,
@@ -579,7 +608,13 @@ impl<'a> Problem<'a> {
         } else {
             knee * (2.0 * squared.sqrt() - knee)
         };
-        self.w_location * distance_cost + if misplaced { self.w_landmass } else { 0.0 }
+        let far = self.location_far[region];
+        let far_cost = if squared > far * far {
+            self.w_far * (squared.sqrt() - far).powi(2)
+        } else {
+            0.0
+        };
+        self.w_location * distance_cost + far_cost + if misplaced { self.w_landmass } else { 0.0 }
     }
 
     /// The whole energy of the assignment `at`.
@@ -1103,8 +1138,11 @@ mod tests {
         (map, cells)
     }
 
-    fn energy(layout: &Layout, cells: &[usize]) -> f64 {
-        Problem::new(layout, &Params::default(), &Links::of(layout)).energy(cells)
+    /// The energy of `cells` as a refinement from `start` with the defaults weighs it.
+    fn energy(layout: &Layout, start: &[usize], cells: &[usize]) -> f64 {
+        let params = Params::default();
+        let far = far_from_home(layout, start, &params);
+        Problem::new(layout, &params, &Links::of(layout), &far).energy(cells)
     }
 
     /// Pieces and holes of the layout `at`, as the metrics count them.
@@ -1145,7 +1183,8 @@ mod tests {
         let map = Map::new(2, 2, 0);
         let layout = map.layout();
         let links = Links::of(&layout);
-        let problem = Problem::new(&layout, &Params::default(), &links);
+        let no_limit = vec![f64::INFINITY; layout.targets.len()];
+        let problem = Problem::new(&layout, &Params::default(), &links, &no_limit);
         let east = Coord { x: 1.0, y: 0.0 };
         let at = |col, row| LatticeCell {
             col,
@@ -1171,12 +1210,13 @@ mod tests {
         let map = Map::new(4, 4, 0);
         let layout = map.layout();
         let links = Links::of(&layout);
+        let no_limit = vec![f64::INFINITY; layout.targets.len()];
         let cost = |knee: f64, col: i32, row: i32| {
             let params = Params {
                 refine_location_knee: knee,
                 ..Params::default()
             };
-            let problem = Problem::new(&layout, &params, &links);
+            let problem = Problem::new(&layout, &params, &links, &no_limit);
             let cell = LatticeCell {
                 col,
                 row,
@@ -1197,11 +1237,46 @@ mod tests {
     }
 
     #[test]
+    fn a_region_pays_the_square_beyond_where_it_started() {
+        // Region 0 belongs at cell (0, 0) and starts on (3, 0), region 3 the other way round;
+        // the others start on their own cells.
+        let map = Map::new(4, 4, 0);
+        let layout = map.layout();
+        let links = Links::of(&layout);
+        let mut start: Vec<usize> = (0..16).collect();
+        start.swap(0, 3);
+        let params = Params {
+            refine_w_far: 1.0,
+            refine_location_far: 2.0,
+            ..Params::default()
+        };
+        let far = far_from_home(&layout, &start, &params);
+        // Where each started, or 2 cells for the regions that started nearer.
+        assert!((far[0] - 3.0).abs() < 1e-12 && (far[3] - 3.0).abs() < 1e-12);
+        assert!((far.iter().enumerate()).all(|(i, &f)| i == 0 || i == 3 || f == 2.0));
+        let problem = Problem::new(&layout, &params, &links, &far);
+        let on = |col, row| LatticeCell {
+            col,
+            row,
+            score: 2.0,
+            part: 0,
+        };
+        let linear = |d: f64| params.refine_w_location * (2.0 * d - 1.0);
+        // Region 0 where it started, and one cell farther: (4 − 3)² more. Region 4, at (0, 1),
+        // 3 cells off on (3, 1): (3 − 2)² more.
+        assert!((problem.placement(0, on(3, 0)) - linear(3.0)).abs() < 1e-12);
+        let farther = problem.placement(0, on(3, 3)) - linear(18f64.sqrt());
+        assert!((farther - (18f64.sqrt() - 3.0).powi(2)).abs() < 1e-12);
+        assert!((problem.placement(4, on(3, 1)) - (linear(3.0) + 1.0)).abs() < 1e-12);
+    }
+
+    #[test]
     fn incremental_deltas_match_full_recomputation() {
         let (map, cells) = scrambled(6, 5, 3);
         let layout = map.layout();
         let links = Links::of(&layout);
-        let problem = Problem::new(&layout, &Params::default(), &links);
+        let no_limit = vec![f64::INFINITY; layout.targets.len()];
+        let problem = Problem::new(&layout, &Params::default(), &links, &no_limit);
         let pool = map.lattice.cells.len();
         let mut board = Board::new(&map.lattice, &cells, pool);
         let mut rng = ChaCha8Rng::seed_from_u64(9);
@@ -1276,8 +1351,8 @@ mod tests {
         let refined = refine(&layout, &cells, &Params::default(), 1, &|_| true).unwrap();
         // Every region back on the cell under its centroid: the only state of energy 0.
         assert_eq!(refined, (0..36).collect::<Vec<_>>());
-        assert!(energy(&layout, &cells) > 10.0);
-        assert_eq!(energy(&layout, &refined), 0.0);
+        assert!(energy(&layout, &cells, &cells) > 10.0);
+        assert_eq!(energy(&layout, &cells, &refined), 0.0);
     }
 
     #[test]
@@ -1294,13 +1369,16 @@ mod tests {
                 ..Params::default()
             };
             let refined = refine(&layout, &cells, &params, seed, &|_| true).unwrap();
-            assert!(energy(&layout, &refined) <= energy(&layout, &cells));
+            assert!(energy(&layout, &cells, &refined) <= energy(&layout, &cells, &cells));
             assert!(distinct(&refined));
             assert!(refined.iter().all(|&c| c < pool));
             if moves == 1000 {
                 // A full run undoes most of a random scramble (from 296 to 31 here; a block in
                 // reading order would have 9).
-                let (before, after) = (energy(&layout, &cells), energy(&layout, &refined));
+                let (before, after) = (
+                    energy(&layout, &cells, &cells),
+                    energy(&layout, &cells, &refined),
+                );
                 assert!(after < 0.2 * before, "{before} → {after}");
             }
         }
@@ -1312,7 +1390,8 @@ mod tests {
         let layout = map.layout();
         let params = Params::default();
         let links = Links::of(&layout);
-        let problem = Problem::new(&layout, &params, &links);
+        let far = far_from_home(&layout, &cells, &params);
+        let problem = Problem::new(&layout, &params, &links, &far);
         let (best, tracked) = anneal(&problem, &cells, &params, 5, &|_| true).unwrap();
         assert!((problem.energy(&best) - tracked).abs() < 1e-6);
     }
@@ -1428,15 +1507,25 @@ mod tests {
         let params = Params::default();
         let links = Links::of(&layout);
         let pool = map.lattice.cells.len();
-        let striped = anneal_in_stripes(&layout, &links, &cells, &params, 3, 4, &|_| true).unwrap();
+        let striped = anneal_in_stripes(
+            &layout,
+            &links,
+            &far_from_home(&layout, &cells, &params),
+            &cells,
+            &params,
+            3,
+            4,
+            &|_| true,
+        )
+        .unwrap();
         let whole = refine(&layout, &cells, &params, 3, &|_| true).unwrap();
         assert!(distinct(&striped) && striped.iter().all(|&c| c < pool));
         let (before, after) = (shape(&map.lattice, &cells), shape(&map.lattice, &striped));
         assert!(after.0 <= before.0 && after.1 <= before.1);
         let (start, stripes, one) = (
-            energy(&layout, &cells),
-            energy(&layout, &striped),
-            energy(&layout, &whole),
+            energy(&layout, &cells, &cells),
+            energy(&layout, &cells, &striped),
+            energy(&layout, &cells, &whole),
         );
         // Frozen bands cost the stripes little: they end within a tenth of the whole board's
         // gain.
@@ -1462,10 +1551,19 @@ mod tests {
                 .unwrap();
             let shares = std::sync::Mutex::new(Vec::new());
             let at = pool.install(|| {
-                anneal_in_stripes(&layout, &links, &cells, &params, 5, 3, &|share| {
-                    shares.lock().unwrap().push(share);
-                    true
-                })
+                anneal_in_stripes(
+                    &layout,
+                    &links,
+                    &far_from_home(&layout, &cells, &params),
+                    &cells,
+                    &params,
+                    5,
+                    3,
+                    &|share| {
+                        shares.lock().unwrap().push(share);
+                        true
+                    },
+                )
             });
             (
                 at.unwrap(),
@@ -1477,7 +1575,16 @@ mod tests {
         assert_ne!(one, cells);
         assert!((share - 1.0).abs() < 1e-9, "{share}");
         assert_eq!(
-            anneal_in_stripes(&layout, &links, &cells, &params, 5, 3, &|_| false),
+            anneal_in_stripes(
+                &layout,
+                &links,
+                &far_from_home(&layout, &cells, &params),
+                &cells,
+                &params,
+                5,
+                3,
+                &|_| false
+            ),
             None
         );
     }
@@ -1489,7 +1596,7 @@ mod tests {
         let params = Params::default();
         assert!(cells.len() < params.refine_swap_only_below);
         let refined = refine(&layout, &cells, &params, 7, &|_| true).unwrap();
-        assert!(energy(&layout, &refined) < energy(&layout, &cells));
+        assert!(energy(&layout, &cells, &refined) < energy(&layout, &cells, &cells));
         let (mut before, mut after) = (cells.clone(), refined.clone());
         before.sort_unstable();
         after.sort_unstable();
