@@ -1083,6 +1083,36 @@ snakegrid_status snakegrid_working_crs(const double *boxes,
                                        struct snakegrid_crs **out);
 
 /**
+ * What to tell the user about laying a layer out in its own projected CRS, as the command line
+ * tells it: a Mercator projection draws areas larger towards the poles, and the regions' areas
+ * set the cell size and the landmasses' budgets. `projection` is the CRS's projection method as
+ * GDAL, PROJ or QGIS name it ("Mercator_1SP", "Popular Visualisation Pseudo Mercator", "merc");
+ * `crs` names the CRS in the message (e.g. "EPSG:3857"). Writes the note to `*out`, or NULL
+ * when there is nothing to tell; the note stays valid until the next call of this function on
+ * the same thread.
+ *
+ * Thread safety: safe from any thread.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_projected_crs_note(const char *projection,
+                                              const char *crs,
+                                              const char **out);
+
+/**
+ * Whether a layer without a CRS, whose regions have the extents `boxes` (as
+ * snakegrid_working_crs() takes them), could be in longitude and latitude: every coordinate
+ * within ±180 and ±90, and the layer wider than a hundredth of a degree. The command line then
+ * adds to its note that the layer may want a geographic CRS; a host says it its own way (QGIS:
+ * set the layer's CRS). Writes the answer to `*out`.
+ *
+ * Thread safety: safe from any thread.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_looks_like_degrees(const double *boxes,
+                                              size_t count,
+                                              bool *out);
+
+/**
  * Frees a CRS handle. NULL is ignored.
  *
  * Thread safety: not concurrently with any other use of the same handle.

@@ -9,7 +9,7 @@ the working-CRS rule, the input checks and the added fields all come from the li
 """
 
 from ._library import Cancelled, LibraryError, SnakegridError, library_path, load
-from .crs import WorkingCrs, working_crs
+from .crs import WorkingCrs, looks_like_degrees, projected_crs_note, working_crs
 from .layout import (
     Cell, Field, GridMap, GroupMetrics, LayoutMetrics, RegionMetrics, edit_pins, fields, id_text,
     layout, score)
@@ -25,5 +25,6 @@ __all__ = [
     "Cancelled", "Cell", "Field", "GridMap", "GroupMetrics", "LayoutMetrics", "LibraryError",
     "Option", "RegionMetrics", "SnakegridError", "WorkingCrs", "check_options", "edit_pins", "fields",
     "id_text",
-    "layout", "library_path", "library_version", "load", "options", "score", "working_crs",
+    "layout", "library_path", "library_version", "load", "looks_like_degrees", "options",
+    "projected_crs_note", "score", "working_crs",
 ]

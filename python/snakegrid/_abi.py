@@ -183,4 +183,9 @@ SIGNATURES = {
     "snakegrid_crs_wkt": (_STATUS, [_P, _OUT_TEXT]),
     "snakegrid_crs_name": (_STATUS, [_P, _OUT_TEXT]),
     "snakegrid_crs_note": (_STATUS, [_P, _OUT_TEXT]),
+    "snakegrid_projected_crs_note": (_STATUS, [_TEXT, _TEXT, _OUT_TEXT]),
+    "snakegrid_looks_like_degrees": (
+        _STATUS,
+        [ctypes.POINTER(ctypes.c_double), _SIZE, ctypes.POINTER(ctypes.c_bool)],
+    ),
 }

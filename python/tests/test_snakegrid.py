@@ -241,6 +241,22 @@ def test_working_crs_refuses_what_cannot_be_degrees():
         snakegrid.working_crs([(1e5, 1e5, 2e5, 2e5)])
 
 
+def test_a_mercator_layer_gets_the_command_lines_note(tmp_path):
+    # The CLI's note on the US states in Web Mercator, and the binding's, word for word.
+    source = str(tmp_path / "states_3857.gpkg")
+    subprocess.run(["ogr2ogr", "-t_srs", "EPSG:3857", source, US_STATES], check=True)
+    run = subprocess.run([CLI, "--id", "id", str(tmp_path / "out.gpkg"), source],
+                         check=True, capture_output=True, text=True)
+    note = snakegrid.projected_crs_note("merc", "EPSG:3857 (WGS 84 / Pseudo-Mercator)")
+    assert note is not None and note in run.stdout + run.stderr
+    assert snakegrid.projected_crs_note("tmerc", "EPSG:32633") is None
+
+
+def test_regions_without_a_crs_may_be_degrees():
+    assert snakegrid.looks_like_degrees([(-17.0, -35.0, 51.0, 37.0)])
+    assert not snakegrid.looks_like_degrees([(4e5, 4e6, 5e5, 4.1e6)])
+
+
 def test_snakegrid_library_names_the_library(monkeypatch, tmp_path):
     wheel_library = snakegrid.load().path
     missing = str(tmp_path / "libsnakegrid.so")

@@ -365,6 +365,30 @@ def test_a_lon_lat_layer_gets_the_librarys_named_crs(us_states_lonlat, tmp_path)
     assert QgsVectorLayer(out, "grid", "ogr").crs().description() == name
 
 
+def test_the_librarys_notes_on_the_layers_crs(us_states_lonlat, tmp_path):
+    import processing
+
+    # A layer in Web Mercator is weighed by its drawn areas; the log says so as the CLI does.
+    mercator = str(tmp_path / "us_states_3857.gpkg")
+    processing.run("native:reprojectlayer", {
+        "INPUT": US_STATES, "TARGET_CRS": QgsCoordinateReferenceSystem("EPSG:3857"),
+        "OUTPUT": mercator})
+    log = Log()
+    run("gridmap", INPUT=mercator, ID_FIELD="id", OUTPUT="memory:", feedback=log)
+    assert any("EPSG:3857 is a Mercator projection" in line for line in log.lines), log.lines
+    log = Log()
+    run("gridmap", INPUT=US_STATES, ID_FIELD="id", OUTPUT="memory:", feedback=log)
+    assert not any("Mercator" in line for line in log.lines), log.lines
+    # Squares a degree wide without a CRS: the log suggests setting one; a kilometre wide, not.
+    for side, hinted in [(1.0, True), (1000.0, False)]:
+        bare = squares_layer([f"r{k}" for k in range(9)], crs="", side=side)
+        assert not bare.crs().isValid()
+        log = Log()
+        run("gridmap", INPUT=bare, ID_FIELD="code", OUTPUT="memory:", feedback=log)
+        warned = [line for line in log.lines if "has no CRS" in line]
+        assert warned and ("set the layer's CRS" in warned[0]) == hinted, log.lines
+
+
 def test_target_crs_gives_square_cells_in_it(us_states_lonlat, tmp_path):
     result = run("gridmap", INPUT=us_states_lonlat, ID_FIELD="id", OUTPUT="memory:",
                  TARGET_CRS="EPSG:3857")

@@ -36,20 +36,25 @@ pub struct WorkingCrs {
 }
 
 /// What the user should know about laying a layer out in its own projected CRS `crs` (a name
-/// for messages), whose projection method GDAL calls `method`: a Mercator projection (Web
-/// Mercator's too) inflates areas towards the poles, by 1/cos² of the latitude, and the
-/// regions' areas set the cell size and the landmasses' budgets (method.md §3, §6). `None`
-/// for other projections; a transverse or oblique Mercator (UTM, say) stays true near its line.
+/// for messages), whose projection method GDAL or QGIS calls `method` (GDAL: "Mercator_1SP",
+/// "Popular Visualisation Pseudo Mercator"; PROJ and QGIS: "merc", "webmerc"): a Mercator
+/// projection (Web Mercator's too) inflates areas towards the poles, by 1/cos² of the
+/// latitude, and the regions' areas set the cell size and the landmasses' budgets (method.md
+/// §3, §6). `None` for other projections; a transverse or oblique Mercator (UTM, "tmerc",
+/// "omerc") stays true near its line.
 pub fn projected_note(method: &str, crs: &str) -> Option<String> {
-    let method = method.to_ascii_lowercase();
-    let cylindrical_mercator = method.contains("mercator")
+    let method = method.trim().to_ascii_lowercase();
+    let cylindrical_mercator = (method.contains("mercator")
         && !method.contains("transverse")
-        && !method.contains("oblique");
+        && !method.contains("oblique"))
+        || method == "merc"
+        || method == "webmerc";
     cylindrical_mercator.then(|| {
         format!(
             "the source CRS {crs} is a Mercator projection, which draws areas larger towards the \
-             poles (twice at 45°, four times at 60°): the regions are weighed as drawn; give \
-             -t_srs an equal-area CRS (EPSG:8857 for the world) to weigh them as they are"
+             poles (twice at 45°, four times at 60°): the regions are weighed as drawn; lay them \
+             out in an equal-area CRS (-t_srs, or QGIS's target CRS; EPSG:8857 for the world) \
+             to weigh them as they are"
         )
     })
 }
@@ -299,6 +304,12 @@ mod tests {
         assert!(projected_note("Mercator_2SP", "EPSG:3395").is_some());
         assert!(projected_note("Popular Visualisation Pseudo Mercator", "x").is_some());
         assert_eq!(projected_note("Transverse_Mercator", "EPSG:32633"), None);
+        // PROJ's and QGIS's acronyms.
+        assert!(projected_note("merc", "EPSG:3857").is_some());
+        assert!(projected_note("webmerc", "EPSG:3857").is_some());
+        assert_eq!(projected_note("tmerc", "EPSG:32633"), None);
+        assert_eq!(projected_note("omerc", "EPSG:2056"), None);
+        assert_eq!(projected_note("laea", "EPSG:3035"), None);
         assert_eq!(projected_note("Hotine_Oblique_Mercator", "x"), None);
         assert_eq!(projected_note("Albers_Conic_Equal_Area", "EPSG:5070"), None);
     }

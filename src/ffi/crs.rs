@@ -4,7 +4,8 @@
 
 use super::handle::{self, Handle, Out};
 use super::status::{c_string, guard, guard_free, Failure, Status};
-use crate::crs::{working_crs, LonLatBox};
+use crate::crs::{looks_like_degrees, projected_note, working_crs, LonLatBox};
+use std::cell::RefCell;
 use std::ffi::{c_char, CString};
 
 /// A chosen working CRS: its WKT2 definition, its name and a note for the user. Made by
@@ -49,26 +50,97 @@ pub unsafe extern "C" fn snakegrid_working_crs(
     guard("snakegrid_working_crs", || {
         // SAFETY: `out` is NULL or writable (header contract).
         let out = unsafe { Out::new(out, "out") }?;
-        let values = count
-            .checked_mul(4)
-            .ok_or_else(|| Failure::new(Status::INVALID_ARGUMENT, "count is too large"))?;
-        // SAFETY: `boxes` is NULL or valid for `4 * count` doubles (header contract).
-        let numbers = unsafe { handle::slice(boxes, values, "boxes") }?;
-        let boxes: Vec<LonLatBox> = numbers
-            .chunks_exact(4)
-            .map(|b| LonLatBox {
-                west: b[0],
-                south: b[1],
-                east: b[2],
-                north: b[3],
-            })
-            .collect();
+        // SAFETY: as the header's contract for `boxes` and `count`.
+        let boxes = unsafe { lon_lat_boxes(boxes, count) }?;
         let chosen = working_crs(&boxes)?;
         out.write(handle::into_raw::<Crs>(ChosenCrs {
             wkt: c_string(&chosen.wkt),
             name: c_string(&chosen.name),
             note: c_string(&chosen.note),
         }));
+        Ok(())
+    })
+}
+
+/// `count` boxes of four numbers each (west, south, east, north) from `boxes`.
+///
+/// # Safety
+/// `boxes` NULL or valid for `4 * count` doubles.
+unsafe fn lon_lat_boxes(boxes: *const f64, count: usize) -> Result<Vec<LonLatBox>, Failure> {
+    let values = count
+        .checked_mul(4)
+        .ok_or_else(|| Failure::new(Status::INVALID_ARGUMENT, "count is too large"))?;
+    // SAFETY: the caller's guarantee.
+    let numbers = unsafe { handle::slice(boxes, values, "boxes") }?;
+    Ok(numbers
+        .chunks_exact(4)
+        .map(|b| LonLatBox {
+            west: b[0],
+            south: b[1],
+            east: b[2],
+            north: b[3],
+        })
+        .collect())
+}
+
+thread_local! {
+    static PROJECTED_NOTE: RefCell<CString> = RefCell::new(CString::default());
+}
+
+/// What to tell the user about laying a layer out in its own projected CRS, as the command line
+/// tells it: a Mercator projection draws areas larger towards the poles, and the regions' areas
+/// set the cell size and the landmasses' budgets. `projection` is the CRS's projection method as
+/// GDAL, PROJ or QGIS name it ("Mercator_1SP", "Popular Visualisation Pseudo Mercator", "merc");
+/// `crs` names the CRS in the message (e.g. "EPSG:3857"). Writes the note to `*out`, or NULL
+/// when there is nothing to tell; the note stays valid until the next call of this function on
+/// the same thread.
+///
+/// Thread safety: safe from any thread.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_projected_crs_note(
+    projection: *const c_char,
+    crs: *const c_char,
+    out: *mut *const c_char,
+) -> Status {
+    guard("snakegrid_projected_crs_note", || {
+        // SAFETY: `out` is NULL or writable (header contract).
+        let out = unsafe { Out::new(out, "out") }?;
+        // SAFETY: NUL-terminated strings or NULL (header contract).
+        let projection = unsafe { handle::text(projection, "projection") }?;
+        // SAFETY: as `projection`.
+        let crs = unsafe { handle::text(crs, "crs") }?;
+        out.write(match projected_note(projection, crs) {
+            Some(note) => PROJECTED_NOTE.with(|slot| {
+                *slot.borrow_mut() = c_string(&note);
+                slot.borrow().as_ptr()
+            }),
+            None => std::ptr::null(),
+        });
+        Ok(())
+    })
+}
+
+/// Whether a layer without a CRS, whose regions have the extents `boxes` (as
+/// snakegrid_working_crs() takes them), could be in longitude and latitude: every coordinate
+/// within ±180 and ±90, and the layer wider than a hundredth of a degree. The command line then
+/// adds to its note that the layer may want a geographic CRS; a host says it its own way (QGIS:
+/// set the layer's CRS). Writes the answer to `*out`.
+///
+/// Thread safety: safe from any thread.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_looks_like_degrees(
+    boxes: *const f64,
+    count: usize,
+    out: *mut bool,
+) -> Status {
+    guard("snakegrid_looks_like_degrees", || {
+        // SAFETY: `out` is NULL or writable (header contract).
+        let out = unsafe { Out::new(out, "out") }?;
+        // SAFETY: as the header's contract for `boxes` and `count`.
+        let boxes = unsafe { lon_lat_boxes(boxes, count) }?;
+        out.write(looks_like_degrees(&boxes));
         Ok(())
     })
 }

@@ -329,6 +329,28 @@ static void test_working_crs(void) {
     snakegrid_crs_free(NULL);
 }
 
+/* What a host laying a layer out in its own CRS tells the user: a Mercator projection by GDAL's,
+ * PROJ's or QGIS's name, never UTM; and whether a layer without a CRS could be in degrees. */
+static void test_source_crs_advice(void) {
+    const char *note = "unset";
+    bool degrees = false;
+    CHECK_OK(snakegrid_projected_crs_note("merc", "EPSG:3857", &note));
+    CHECK(note != NULL && strstr(note, "EPSG:3857 is a Mercator projection") != NULL);
+    CHECK_OK(snakegrid_projected_crs_note("Mercator_1SP", "EPSG:3395", &note));
+    CHECK(note != NULL && strstr(note, "EPSG:3395") != NULL);
+    CHECK_OK(snakegrid_projected_crs_note("Transverse_Mercator", "EPSG:32633", &note));
+    CHECK(note == NULL);
+    CHECK_FAILS(snakegrid_projected_crs_note(NULL, "EPSG:3857", &note), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_projected_crs_note("merc", "EPSG:3857", NULL), SNAKEGRID_NULL_ARGUMENT);
+    const double africa[4] = {-17.0, -35.0, 51.0, 37.0};
+    const double metres[4] = {400000.0, 4000000.0, 500000.0, 4100000.0};
+    CHECK_OK(snakegrid_looks_like_degrees(africa, 1, &degrees));
+    CHECK(degrees);
+    CHECK_OK(snakegrid_looks_like_degrees(metres, 1, &degrees));
+    CHECK(!degrees);
+    CHECK_FAILS(snakegrid_looks_like_degrees(NULL, 1, &degrees), SNAKEGRID_NULL_ARGUMENT);
+}
+
 /* The fields a grid layer adds: named, typed, and valued per region as the cell accessors say. */
 static void test_fields(void) {
     size_t count = snakegrid_field_count();
@@ -933,6 +955,7 @@ int main(void) {
     test_options();
     test_option_table();
     test_working_crs();
+    test_source_crs_advice();
     test_fields();
     test_bad_regions();
     test_invalid_input_runs();

@@ -201,7 +201,8 @@ def working_crs(sg, features, target, feedback):
     """The CRS to lay out in, as the command line's -t_srs decides: `target` when valid, else
     the layer's own when projected, else the library's equal-area rule for the features'
     extents, made from its named WKT2 (QGIS then shows its name; nothing is saved to the
-    user's CRS database)."""
+    user's CRS database). Warns as the command line notes: a layer without a CRS whose
+    coordinates could be degrees, a layer in a Mercator projection (the library decides both)."""
     source = features.crs
     if target.isValid():
         if not source.isValid():
@@ -213,9 +214,19 @@ def working_crs(sg, features, target, feedback):
                 "degrees.")
         return target
     if not source.isValid():
-        feedback.pushWarning("The layer has no CRS: its coordinates are taken as planar.")
+        message = "The layer has no CRS: its coordinates are taken as planar."
+        if sg.looks_like_degrees(features.boxes()):
+            message += (" They lie within ±180 and ±90, as longitudes and latitudes would: if "
+                        "they are, set the layer's CRS (EPSG:4326 or their own geographic CRS) "
+                        "first.")
+        feedback.pushWarning(message)
         return source
     if not source.isGeographic():
+        # A Mercator layer is weighed by its drawn areas: the library says when and why.
+        note = sg.projected_crs_note(source.projectionAcronym() or "",
+                                     source.authid() or source.description())
+        if note:
+            feedback.pushWarning(note[0].upper() + note[1:] + ".")
         return source
     chosen = sg.working_crs(features.boxes())
     crs = QgsCoordinateReferenceSystem.fromWkt(chosen.wkt)
