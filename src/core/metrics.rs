@@ -456,14 +456,48 @@ impl LayoutShape {
 
 /// The area of the pieces' inner rings, in cells.
 fn hole_area(pieces: &[HashSet<Position>], tiling: Tiling) -> u32 {
-    let holes: f64 = pieces
-        .iter()
-        .flat_map(|piece| boundary_loops(piece, tiling))
-        .map(|ring| ring_area(&ring) / tiling.cell_area_in_corner_units())
-        .filter(|&area| area < 0.0)
-        .map(f64::abs)
-        .sum();
-    holes.round() as u32
+    pieces.iter().map(|piece| enclosed_by(piece, tiling)).sum()
+}
+
+/// The positions `piece` encloses: those of its box, widened by a position all round, that no
+/// path of edge neighbours outside the piece joins to the box's rim. A piece's boundary loops
+/// bound the edge-connected regions of the positions outside it ([`boundary_loops`]), so these
+/// are what its inner loops enclose, counted on a grid of the box where tracing the loops took
+/// a hash map of corners per piece (a landmass block's settling asks this for the whole layout
+/// at every shift it weighs: a thousand islands, a quarter of the run in the loops).
+fn enclosed_by(piece: &HashSet<Position>, tiling: Tiling) -> u32 {
+    let (mut low, mut high) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
+    for &(c, r) in piece {
+        low = (low.0.min(c - 1), low.1.min(r - 1));
+        high = (high.0.max(c + 1), high.1.max(r + 1));
+    }
+    if piece.is_empty() {
+        return 0;
+    }
+    let width = (high.0 - low.0 + 1) as usize;
+    let index = |(c, r): Position| (r - low.1) as usize * width + (c - low.0) as usize;
+    let inside = |(c, r): Position| (low.0..=high.0).contains(&c) && (low.1..=high.1).contains(&r);
+    // Per position of the box: in the piece, reached from the rim, or neither (enclosed).
+    const OPEN: u8 = 0;
+    const PIECE: u8 = 1;
+    const REACHED: u8 = 2;
+    let mut state = vec![OPEN; width * (high.1 - low.1 + 1) as usize];
+    for &p in piece {
+        state[index(p)] = PIECE;
+    }
+    // The rim is outside the piece and joined all round (every tiling steps along rows and
+    // columns), so one corner of it reaches all of it.
+    state[index(low)] = REACHED;
+    let mut stack = vec![low];
+    while let Some(p) = stack.pop() {
+        for &n in tiling.edge_neighbours(p).iter() {
+            if inside(n) && state[index(n)] == OPEN {
+                state[index(n)] = REACHED;
+                stack.push(n);
+            }
+        }
+    }
+    state.iter().filter(|&&s| s == OPEN).count() as u32
 }
 
 /// How many times the landmasses' blocks break: over the landmasses (`part[i]` is cell `i`'s),
@@ -619,15 +653,6 @@ fn trace_loop(outgoing: &mut HashMap<Corner, Vec<Corner>>, start: Corner) -> Vec
     ring
 }
 
-/// Signed area of a ring of corners, in cells (counter-clockwise positive).
-fn ring_area(ring: &[Corner]) -> f64 {
-    let twice: i64 = ring
-        .windows(2)
-        .map(|w| w[0].0 * w[1].1 - w[1].0 * w[0].1)
-        .sum();
-    twice as f64 / 2.0
-}
-
 /// C_shape: similarity of the outer ring of the largest piece of the cells and that of the
 /// largest part of the regions' union, each by [`descriptor`]:
 /// similarity = 1 − ‖d₁ − d₂‖₂ / (‖d₁‖₂ + ‖d₂‖₂) (method.md §8), in 0..=1, 1 for equal
@@ -738,6 +763,53 @@ fn cell_ring(layout: &Scored, shape: &LayoutShape) -> Option<LineString<f64>> {
 mod tests {
     use super::*;
     use geo::{polygon, Polygon};
+
+    #[test]
+    fn enclosed_positions_are_the_inner_loops_area() {
+        // Random cell sets, dense enough for holes, pinches where cells meet at a corner, and
+        // pieces inside other pieces' holes: the grid count against the traced loops' areas.
+        use rand::{Rng, SeedableRng};
+        let tilings = [
+            Tiling::Square,
+            Tiling::Hex(crate::core::params::HexOrientation::Pointy),
+            Tiling::Hex(crate::core::params::HexOrientation::Flat),
+        ];
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut with_holes = 0;
+        for round in 0..600 {
+            let tiling = tilings[round % 3];
+            let side = rng.random_range(3..12);
+            let density = rng.random_range(0.45..0.8);
+            let cells: Vec<Position> = (0..side * side)
+                .map(|k| (k % side, k / side))
+                .filter(|_| rng.random::<f64>() < density)
+                .collect();
+            let occupied: HashSet<Position> = cells.iter().copied().collect();
+            for piece in pieces(&cells, &occupied, tiling) {
+                // A cell's area in corner units: 1 for squares; 6 for hexagons, whose corner
+                // units are a quarter of the width by half the side.
+                let cell = if tiling == Tiling::Square { 1.0 } else { 6.0 };
+                let traced: f64 = (boundary_loops(&piece, tiling).iter())
+                    .map(|ring| ring_area(ring) / cell)
+                    .filter(|&area| area < 0.0)
+                    .sum();
+                let counted = enclosed_by(&piece, tiling);
+                assert_eq!(f64::from(counted), -traced, "{tiling:?} {piece:?}");
+                with_holes += usize::from(counted > 0);
+            }
+        }
+        // The sets exercise holes, not only solid pieces.
+        assert!(with_holes > 50, "{with_holes}");
+    }
+
+    /// Signed area of a ring of corners, in corner units (counter-clockwise positive).
+    fn ring_area(ring: &[Corner]) -> f64 {
+        let twice: i64 = ring
+            .windows(2)
+            .map(|w| w[0].0 * w[1].1 - w[1].0 * w[0].1)
+            .sum();
+        twice as f64 / 2.0
+    }
 
     /// A 3×3 block of unit-square regions, region `3·row + col` at column `col`, row `row` (row 0
     /// on top), with rook adjacency and the block's outline.

@@ -190,15 +190,6 @@ impl Tiling {
         }
     }
 
-    /// The area of a cell in the units of [`Tiling::corners`]: 1 for squares; 6 for hexagons,
-    /// whose corner units are a quarter of the width by half the side.
-    pub fn cell_area_in_corner_units(self) -> f64 {
-        match self {
-            Tiling::Square => 1.0,
-            Tiling::Hex(_) => 6.0,
-        }
-    }
-
     /// The shortest distance between the centres of two positions, in cells: 1 for squares,
     /// the row (pointy) or column (flat) spacing 1.5·a for hexagons.
     pub fn pitch(self) -> f64 {
