@@ -1544,6 +1544,9 @@ mod tests {
             ..Params::default()
         };
         let links = Links::of(&layout);
+        let far = far_from_home(&layout, &cells, &params);
+        let striped =
+            |tick: Tick| anneal_in_stripes(&layout, &links, &far, &cells, &params, 5, 3, tick);
         let on = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -1551,19 +1554,10 @@ mod tests {
                 .unwrap();
             let shares = std::sync::Mutex::new(Vec::new());
             let at = pool.install(|| {
-                anneal_in_stripes(
-                    &layout,
-                    &links,
-                    &far_from_home(&layout, &cells, &params),
-                    &cells,
-                    &params,
-                    5,
-                    3,
-                    &|share| {
-                        shares.lock().unwrap().push(share);
-                        true
-                    },
-                )
+                striped(&|share| {
+                    shares.lock().unwrap().push(share);
+                    true
+                })
             });
             (
                 at.unwrap(),
@@ -1574,19 +1568,7 @@ mod tests {
         assert_eq!(on(4).0, one);
         assert_ne!(one, cells);
         assert!((share - 1.0).abs() < 1e-9, "{share}");
-        assert_eq!(
-            anneal_in_stripes(
-                &layout,
-                &links,
-                &far_from_home(&layout, &cells, &params),
-                &cells,
-                &params,
-                5,
-                3,
-                &|_| false
-            ),
-            None
-        );
+        assert_eq!(striped(&|_| false), None);
     }
 
     #[test]
