@@ -447,10 +447,13 @@ impl LayoutShape {
     }
 
     /// [`LayoutShape::holes`] of `cells` alone, for a caller that asks it often (the landmass
-    /// blocks' settling): the notches are not counted.
+    /// blocks' settling): neither the notches nor the pieces' sets are made.
     pub(crate) fn holes_of(cells: &[Position], tiling: Tiling) -> u32 {
-        let occupied: HashSet<Position> = cells.iter().copied().collect();
-        hole_area(&pieces(cells, &occupied, tiling), tiling)
+        let mut holes = 0;
+        each_piece(cells, cells.iter().copied().collect(), tiling, |piece| {
+            holes += enclosed_by(piece, tiling);
+        });
+        holes
     }
 }
 
@@ -465,13 +468,14 @@ fn hole_area(pieces: &[HashSet<Position>], tiling: Tiling) -> u32 {
 /// are what its inner loops enclose, counted on a grid of the box where tracing the loops took
 /// a hash map of corners per piece (a landmass block's settling asks this for the whole layout
 /// at every shift it weighs: a thousand islands, a quarter of the run in the loops).
-fn enclosed_by(piece: &HashSet<Position>, tiling: Tiling) -> u32 {
+fn enclosed_by<'a>(piece: impl IntoIterator<Item = &'a Position> + Copy, tiling: Tiling) -> u32 {
     let (mut low, mut high) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
     for &(c, r) in piece {
         low = (low.0.min(c - 1), low.1.min(r - 1));
         high = (high.0.max(c + 1), high.1.max(r + 1));
     }
-    if piece.is_empty() {
+    if low.0 > high.0 {
+        // No cell.
         return 0;
     }
     let width = (high.0 - low.0 + 1) as usize;
@@ -524,27 +528,41 @@ fn pieces(
     occupied: &HashSet<Position>,
     tiling: Tiling,
 ) -> Vec<HashSet<Position>> {
-    let mut unvisited = occupied.clone();
     let mut found = Vec::new();
+    each_piece(cells, occupied.clone(), tiling, |piece| {
+        found.push(piece.iter().copied().collect::<HashSet<Position>>());
+    });
+    // Stable: equal sizes keep their order.
+    found.sort_by_key(|piece| std::cmp::Reverse(piece.len()));
+    found
+}
+
+/// Calls `visit` with each edge-connected component of the cells, in the order their first
+/// cells come; `unvisited` holds the cells (duplicates count once).
+fn each_piece(
+    cells: &[Position],
+    mut unvisited: HashSet<Position>,
+    tiling: Tiling,
+    mut visit: impl FnMut(&[Position]),
+) {
+    let mut piece = Vec::new();
     for &start in cells {
         if !unvisited.remove(&start) {
             continue;
         }
-        let mut piece = HashSet::from_iter([start]);
-        let mut stack = vec![start];
-        while let Some(p) = stack.pop() {
-            for &next in tiling.edge_neighbours(p).iter() {
-                if unvisited.remove(&next) {
-                    piece.insert(next);
-                    stack.push(next);
+        piece.clear();
+        piece.push(start);
+        let mut next = 0;
+        while let Some(&p) = piece.get(next) {
+            next += 1;
+            for &near in tiling.edge_neighbours(p).iter() {
+                if unvisited.remove(&near) {
+                    piece.push(near);
                 }
             }
         }
-        found.push(piece);
+        visit(&piece);
     }
-    // Stable: equal sizes keep their order.
-    found.sort_by_key(|piece| std::cmp::Reverse(piece.len()));
-    found
 }
 
 /// Empty positions next to a cell whose sides are all taken but at most one.
