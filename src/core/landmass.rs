@@ -320,8 +320,13 @@ impl Outlines {
         if !another(nearest.ring) {
             // The part's own segment is the nearest, so the disk out to it crosses no outline:
             // were `p` inside another part, the whole disk would be, and that part would reach
-            // the own segment on the disk's rim, as near as it. Only then is a ray cast.
-            let tie = self.all.within(p, d).any(|(s, _)| another(s.ring));
+            // the own segment on the disk's rim, as near as it. Only then is a ray cast (the
+            // ball reaches a hair beyond, so that no tie is lost to rounding: a segment it
+            // catches needlessly only costs that ray).
+            let tie = self
+                .all
+                .within(p, d * (1.0 + 1e-9))
+                .any(|(s, _)| another(s.ring));
             return (d, tie && self.all.contains(p));
         }
         let own = self.own[part].nearest(p).map_or(f64::INFINITY, |(_, d)| d);
