@@ -608,13 +608,22 @@ impl<'a> Problem<'a> {
         } else {
             knee * (2.0 * squared.sqrt() - knee)
         };
+        self.w_location * distance_cost
+            + self.far_cost(region, squared)
+            + if misplaced { self.w_landmass } else { 0.0 }
+    }
+
+    /// What region `region`, `squared` cells² from its place, pays beyond its limit
+    /// ([`far_from_home`]); with `refine_w_far` at 0, the default, nothing is looked up.
+    fn far_cost(&self, region: usize, squared: f64) -> f64 {
+        if self.w_far == 0.0 {
+            return 0.0;
+        }
         let far = self.location_far[region];
-        let far_cost = if squared > far * far {
-            self.w_far * (squared.sqrt() - far).powi(2)
-        } else {
-            0.0
-        };
-        self.w_location * distance_cost + far_cost + if misplaced { self.w_landmass } else { 0.0 }
+        if squared <= far * far {
+            return 0.0;
+        }
+        self.w_far * (squared.sqrt() - far).powi(2)
     }
 
     /// The whole energy of the assignment `at`.
