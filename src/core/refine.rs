@@ -48,6 +48,15 @@ pub struct Layout<'a> {
     pub misplaced: Option<&'a (dyn Fn(usize, Position) -> bool + Sync)>,
 }
 
+impl Layout<'_> {
+    /// The squared distance, in cells, from region `region`'s place to the centre of `cell`.
+    fn squared_distance(&self, region: usize, cell: LatticeCell) -> f64 {
+        let offset = self.targets[region] - self.lattice.centre(cell.col, cell.row);
+        let size = self.lattice.cell_size;
+        (offset.x * offset.x + offset.y * offset.y) / (size * size)
+    }
+}
+
 /// Improves `cells` (per region, an index into `layout.lattice.cells`) and returns the new
 /// assignment; deterministic for a given `seed`.
 ///
@@ -146,12 +155,11 @@ fn moves(params: &Params, regions: usize) -> usize {
 /// spread west, 5 cells on average) is held only from going farther: a fixed limit pulled the
 /// whole tail back in and broke the outline (shape 0.930 → 0.892).
 fn far_from_home(layout: &Layout, cells: &[usize], params: &Params) -> Vec<f64> {
-    let lattice = layout.lattice;
-    (cells.iter().zip(layout.targets))
-        .map(|(&k, &target)| {
-            let centre = lattice.centre(lattice.cells[k].col, lattice.cells[k].row);
-            let d = target - centre;
-            let start = (d.x * d.x + d.y * d.y).sqrt() / lattice.cell_size;
+    (cells.iter().enumerate())
+        .map(|(region, &k)| {
+            let start = layout
+                .squared_distance(region, layout.lattice.cells[k])
+                .sqrt();
             start.max(params.refine_location_far)
         })
         .collect()
@@ -588,8 +596,6 @@ impl<'a> Problem<'a> {
     /// What region `region` costs on `cell` by itself: its distance from its place, and being
     /// nearer another landmass than its own.
     fn placement(&self, region: usize, cell: LatticeCell) -> f64 {
-        let centre = self.layout.lattice.centre(cell.col, cell.row);
-        let offset = self.layout.targets[region] - centre;
         let position = (cell.col, cell.row);
         let misplaced = self.layout.misplaced.is_some_and(|misplaced| {
             *self
@@ -600,8 +606,7 @@ impl<'a> Problem<'a> {
         });
         // The squared distance in cells, and beyond the knee the tangent line of the square,
         // which grows with the distance itself (a Huber cost).
-        let size = self.layout.lattice.cell_size;
-        let squared = (offset.x * offset.x + offset.y * offset.y) / (size * size);
+        let squared = self.layout.squared_distance(region, cell);
         let knee = self.location_knee;
         let distance_cost = if squared <= knee * knee {
             squared
@@ -1271,8 +1276,8 @@ mod tests {
             part: 0,
         };
         let linear = |d: f64| params.refine_w_location * (2.0 * d - 1.0);
-        // Region 0 where it started, and one cell farther: (4 − 3)² more. Region 4, at (0, 1),
-        // 3 cells off on (3, 1): (3 − 2)² more.
+        // Region 0 where it started, 3 cells off: nothing more; on (3, 3), √18 cells off:
+        // (√18 − 3)² more. Region 4, at (0, 1), 3 cells off on (3, 1): (3 − 2)² more.
         assert!((problem.placement(0, on(3, 0)) - linear(3.0)).abs() < 1e-12);
         let farther = problem.placement(0, on(3, 3)) - linear(18f64.sqrt());
         assert!((farther - (18f64.sqrt() - 3.0).powi(2)).abs() < 1e-12);
