@@ -784,8 +784,8 @@ mod tests {
 
     #[test]
     fn enclosed_positions_are_the_inner_loops_area() {
-        // Random cell sets, dense enough for holes, pinches where cells meet at a corner, and
-        // pieces inside other pieces' holes: the grid count against the traced loops' areas.
+        // Random cell sets, dense enough for holes and for pinches where cells meet at a
+        // corner: the grid count against the traced loops' areas.
         use rand::{Rng, SeedableRng};
         let tilings = [
             Tiling::Square,
