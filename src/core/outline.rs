@@ -122,17 +122,24 @@ pub fn prepare(
         .collect();
     // A repair stays within the box of the region as drawn: the drawn boxes group both.
     let clusters = clusters(drawn, SHARED.reach);
-    reached(0.05, "outline: adjacency");
-    let adjacency = adjacency(drawn, &clusters, params.point_adjacency, SHARED);
-    reached(0.4, "outline: union");
-    let regions_union = merge(regions, valid_here, &clusters);
-    reached(0.8, "outline: simplifying");
-    let landmass_of = landmasses(regions, &regions_union, &centroids);
-    let union = clean(regions_union.clone(), &centroids);
-    // Small layers still keep a quadrilateral per ring on average.
-    let target = ((params.vertices_per_region * regions.len() as f64).ceil() as usize)
-        .max(4 * rings_of(&union).len());
-    let (simplified, joined) = simplify(&union, target, params.simplify_tolerance);
+    reached(0.05, "outline: adjacency, union and simplification");
+    // The borders as drawn give the adjacency, and the union of the regions gives the outline:
+    // the two do not meet, and on a dense boundary each is a few tenths of a second that one
+    // core spends mostly alone (BENCHMARKS.md "Dense boundaries"), so they run side by side.
+    let (adjacency, (regions_union, landmass_of, simplified, joined)) = rayon::join(
+        || adjacency(drawn, &clusters, params.point_adjacency, SHARED),
+        || {
+            let regions_union = merge(regions, valid_here, &clusters);
+            let landmass_of = landmasses(regions, &regions_union, &centroids);
+            let union = clean(regions_union.clone(), &centroids);
+            // Small layers still keep a quadrilateral per ring on average.
+            let target = ((params.vertices_per_region * regions.len() as f64).ceil() as usize)
+                .max(4 * rings_of(&union).len());
+            let (simplified, joined) = simplify(&union, target, params.simplify_tolerance);
+            (regions_union, landmass_of, simplified, joined)
+        },
+    );
+    reached(0.95, "outline");
     // Parts joined across hairline gaps: their regions' borders lie across the gaps too.
     let neighbours = if joined {
         let near = self::adjacency(
