@@ -443,7 +443,7 @@ impl Input {
 /// decides only between identical geometries.
 fn geometric_order(regions: &[Region], geometries: &[Cow<MultiPolygon<f64>>]) -> Vec<usize> {
     let keys: Vec<(Coord<f64>, f64, Coord<f64>)> = geometries
-        .iter()
+        .par_iter()
         .map(|g| {
             let centroid = g.centroid().map_or(Coord { x: 0.0, y: 0.0 }, |p| p.0);
             let smallest = g
@@ -480,9 +480,11 @@ impl Placed {
         let sorted: Vec<&MultiPolygon<f64>> = order.iter().map(|&i| &*geometries[i]).collect();
         let frame =
             Frame::of(&sorted).ok_or_else(|| Error::input(None, "the regions have no area"))?;
-        let unit: Vec<MultiPolygon<f64>> =
-            sorted.iter().map(|g| frame.polygons_to_unit(g)).collect();
-        if let Some(k) = unit.iter().position(|g| {
+        let unit: Vec<MultiPolygon<f64>> = sorted
+            .par_iter()
+            .map(|g| frame.polygons_to_unit(g))
+            .collect();
+        if let Some(k) = unit.par_iter().position_first(|g| {
             g.coords_iter()
                 .any(|c| !(c.x.abs() <= MAX_SPAN && c.y.abs() <= MAX_SPAN))
         }) {

@@ -3,6 +3,7 @@
 //! a cell whatever the map units are.
 
 use geo::{Area, BoundingRect, Coord, MapCoords, MultiPolygon};
+use rayon::prelude::*;
 
 /// An affine map between map units and cells: `unit = (map − origin) / scale`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -16,7 +17,10 @@ pub struct Frame {
 impl Frame {
     /// The frame of `regions`. `None` when they have no area.
     pub fn of(regions: &[&MultiPolygon<f64>]) -> Option<Frame> {
-        let area: f64 = regions.iter().map(|r| r.unsigned_area()).sum();
+        // Each region's area on any core, summed in order: the sum's rounding does not depend
+        // on the threads.
+        let areas: Vec<f64> = regions.par_iter().map(|r| r.unsigned_area()).collect();
+        let area: f64 = areas.iter().sum();
         let scale = (area / regions.len() as f64).sqrt();
         let bounds = super::geometry::bounds(regions.iter().filter_map(|r| r.bounding_rect()))?;
         (scale.is_finite() && scale > 0.0).then(|| Frame {

@@ -8,7 +8,7 @@ use crate::input::{polygons_of, Admission, GeometryKind};
 use gdal::spatial_ref::CoordTransform;
 use gdal::vector::{Feature, FieldValue, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
 use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
-use geo::CoordsIter;
+use geo::{CoordsIter, MultiPolygon};
 use std::path::Path;
 
 pub(crate) fn open(session: &Session, src: &str) -> Result<Dataset, Error> {
@@ -292,13 +292,18 @@ pub(crate) fn boxes(checked: &[Checked]) -> Vec<LonLatBox> {
         .collect()
 }
 
-/// The regions in the working CRS, in the order of `checked`.
+/// The regions in the working CRS, in the order of `checked`. GDAL hands each geometry over as
+/// WKB in one call and the bytes are parsed on every core: the binding's own conversion asks
+/// GDAL for one vertex at a time, on one core, a tenth of a second at 10⁶ vertices
+/// (BENCHMARKS.md "Dense boundaries").
 pub(crate) fn regions(
     session: &Session,
     checked: &[Checked],
     transform: Option<&CoordTransform>,
 ) -> Result<Vec<Region>, Error> {
-    checked
+    use rayon::prelude::*;
+    let cannot_read = |id: &str| Error::input(Some(id), "the geometry cannot be read as polygons");
+    let read = checked
         .iter()
         .map(|c| {
             let projected;
@@ -314,24 +319,30 @@ pub(crate) fn regions(
                 }
                 None => &c.geometry,
             };
-            let geometry = (geometry.to_geo().ok().and_then(polygons_of)).ok_or_else(|| {
-                Error::input(Some(&c.id), "the geometry cannot be read as polygons")
-            })?;
-            if geometry
-                .coords_iter()
-                .any(|p| !(p.x.is_finite() && p.y.is_finite()))
-            {
+            let bytes = geometry.wkb().map_err(|_| cannot_read(&c.id))?;
+            let region = Region {
+                id: c.id.clone(),
+                geometry: MultiPolygon(Vec::new()),
+                group: c.group.clone(),
+                pin: c.pin,
+            };
+            Ok((region, bytes))
+        })
+        .collect::<Result<Vec<(Region, Vec<u8>)>, Error>>()?;
+    (read.into_par_iter())
+        .map(|(mut region, bytes)| {
+            region.geometry =
+                crate::wkb::to_multi_polygon(&bytes).map_err(|_| cannot_read(&region.id))?;
+            if (region.geometry.coords_iter()).any(|p| !(p.x.is_finite() && p.y.is_finite())) {
                 return Err(Error::input(
-                    Some(&c.id),
+                    Some(&region.id),
                     "the geometry has a NaN or infinite coordinate",
                 ));
             }
-            Ok(Region {
-                id: c.id.clone(),
-                geometry,
-                group: c.group.clone(),
-                pin: c.pin,
-            })
+            Ok(region)
         })
+        // Every result in order, so that the first bad feature is the one named, as before.
+        .collect::<Vec<Result<Region, Error>>>()
+        .into_iter()
         .collect()
 }
