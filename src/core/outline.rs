@@ -105,8 +105,8 @@ pub struct Prepared {
 /// (method.md §8) and the user read adjacency off the boundaries as drawn, and a repair can drop
 /// a sliver of no area that runs along a neighbour (an out-and-back stretch of border whose two
 /// sides cross), and with it the shared border;
-/// `reached` hears the share of the work done as each costly stage begins (adjacency and union
-/// each about a third of it on dense boundaries, BENCHMARKS.md "Dense boundaries").
+/// `reached` hears the share of the work done as the costly stages begin (the adjacency, union
+/// and simplification, side by side, most of it on dense boundaries) and as they end.
 pub fn prepare(
     regions: &[&MultiPolygon<f64>],
     drawn: &[&MultiPolygon<f64>],

@@ -341,7 +341,7 @@ pub(crate) fn regions(
             }
             Ok(region)
         })
-        // Every result in order, so that the first bad feature is the one named, as before.
+        // Every result in order, so that the first feature whose geometry is bad is named.
         .collect::<Vec<Result<Region, Error>>>()
         .into_iter()
         .collect()
