@@ -4,7 +4,6 @@
 //! regions or their ids, because everything works on the regions in a geometric order.
 
 use super::assign::Prices;
-use super::derived_seed;
 use super::frame::Frame;
 use super::grid::{self, Lattice, LatticeCell};
 use super::groups;
@@ -21,6 +20,7 @@ use super::{
     assign, forces, geometry, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params,
     Progress, Region, RegionCell, RegionMetrics,
 };
+use super::{derived_seed, first_error_in_order};
 use geo::{
     Area, Centroid, Coord, CoordsIter, HasDimensions, LineString, MakeValid, MultiPolygon, Polygon,
 };
@@ -305,14 +305,11 @@ fn generate_here(
         let chosen_layouts: Vec<(usize, Layout)> = (chosen.iter())
             .map(|&k| (k, layouts[k].take().expect("each layout is chosen once")))
             .collect();
-        let refined = chosen_layouts
-            .into_par_iter()
-            .map(|(k, layout)| {
-                tracker.layout_work(&weights, k, jobs.len(), |report| {
-                    context.refined(layout, derived_seed(params.seed, 2, k), report)
-                })
+        let refined = first_error_in_order(chosen_layouts.into_par_iter().map(|(k, layout)| {
+            tracker.layout_work(&weights, k, jobs.len(), |report| {
+                context.refined(layout, derived_seed(params.seed, 2, k), report)
             })
-            .collect::<Result<Vec<_>, Error>>()?;
+        }))?;
         (refined, chosen)
     };
 
@@ -540,10 +537,7 @@ fn check(regions: &[Region]) -> Result<Checked, Error> {
             ));
         }
     }
-    regions
-        .par_iter()
-        .map(admit)
-        .collect::<Result<Vec<()>, Error>>()?;
+    first_error_in_order(regions.par_iter().map(admit))?;
     let given: Vec<Cow<MultiPolygon<f64>>> = (regions.iter())
         .map(|r| Cow::Borrowed(&r.geometry))
         .collect();
@@ -558,8 +552,8 @@ fn check(regions: &[Region]) -> Result<Checked, Error> {
             valid_here[i] = valid;
         }
     }
-    let checked = (regions.par_iter().zip(&valid_here))
-        .map(|(region, &valid)| {
+    let checked = first_error_in_order((regions.par_iter().zip(&valid_here)).map(
+        |(region, &valid)| {
             if !valid {
                 return repaired(region);
             }
@@ -567,8 +561,8 @@ fn check(regions: &[Region]) -> Result<Checked, Error> {
                 return Err(Error::input(Some(&region.id), "the polygon has no area"));
             }
             Ok((Cow::Borrowed(&region.geometry), None))
-        })
-        .collect::<Result<Vec<_>, Error>>()?;
+        },
+    ))?;
     let notes: Vec<String> = (regions.iter().zip(&checked))
         .filter_map(|(region, (_, problem))| {
             let problem = problem.as_ref()?;
@@ -1383,6 +1377,56 @@ mod tests {
             .iter()
             .any(|n| n.contains("feature a: invalid polygon repaired")));
         assert_eq!(map.adjacency, vec![(0, 1)]);
+    }
+
+    #[test]
+    fn of_two_bad_features_the_first_in_input_order_is_named_on_any_thread() {
+        // 400 squares in a row, of which two are bad: a NaN corner, or flat (no area). A
+        // sequential check meets feature 150 first; rayon's collect into a Result reported
+        // whichever a worker met first, and the two halves of the layer start on different
+        // workers.
+        let ring = |k: usize, top: f64, corner: f64| {
+            let x = k as f64;
+            MultiPolygon(vec![Polygon::new(
+                LineString::from(vec![(x, 0.0), (x + 1.0, 0.0), (x + 1.0, top), (x, corner)]),
+                vec![],
+            )])
+        };
+        let params = Params {
+            threads: 4,
+            ..Params::default()
+        };
+        let nan_corner = |k| ring(k, 1.0, f64::NAN);
+        let flat = |k| ring(k, 0.0, 0.0);
+        for (bad, message) in [
+            (&nan_corner as &dyn Fn(usize) -> MultiPolygon<f64>, "NaN"),
+            (&flat, "no area"),
+        ] {
+            let regions: Vec<Region> = (0..400)
+                .map(|k| Region {
+                    id: format!("r{k}"),
+                    geometry: if k == 150 || k == 390 {
+                        bad(k)
+                    } else {
+                        ring(k, 1.0, 1.0)
+                    },
+                    group: None,
+                    pin: None,
+                })
+                .collect();
+            for _ in 0..20 {
+                match generate(&regions, &params, &|_, _| true) {
+                    Err(Error::InvalidInput {
+                        feature,
+                        message: m,
+                    }) => {
+                        assert_eq!(feature.as_deref(), Some("r150"), "{m}");
+                        assert!(m.contains(message), "{m}");
+                    }
+                    other => panic!("feature r150 was not refused: {:?}", other.err()),
+                }
+            }
+        }
     }
 
     #[test]

@@ -109,6 +109,16 @@ fn derived_seed(base: u64, purpose: u64, k: usize) -> u64 {
         ^ (k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)
 }
 
+/// The items of a parallel check in input order, or the first error in input order, as a
+/// sequential check would report it. rayon's own collect into a `Result` returns whichever error
+/// a thread met first, so a layer with two bad features could name either from run to run.
+pub(crate) fn first_error_in_order<T: Send>(
+    results: impl rayon::iter::IndexedParallelIterator<Item = Result<T, Error>>,
+) -> Result<Vec<T>, Error> {
+    let results: Vec<Result<T, Error>> = results.collect();
+    results.into_iter().collect()
+}
+
 /// Progress reporting: called with the fraction done (0..=1) and a short message; returning
 /// `false` cancels the run, which then ends with [`Error::Cancelled`]. Called from worker
 /// threads, hence `Sync`.

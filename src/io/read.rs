@@ -329,20 +329,15 @@ pub(crate) fn regions(
             Ok((region, bytes))
         })
         .collect::<Result<Vec<(Region, Vec<u8>)>, Error>>()?;
-    (read.into_par_iter())
-        .map(|(mut region, bytes)| {
-            region.geometry =
-                crate::wkb::to_multi_polygon(&bytes).map_err(|_| cannot_read(&region.id))?;
-            if (region.geometry.coords_iter()).any(|p| !(p.x.is_finite() && p.y.is_finite())) {
-                return Err(Error::input(
-                    Some(&region.id),
-                    "the geometry has a NaN or infinite coordinate",
-                ));
-            }
-            Ok(region)
-        })
-        // Every result in order, so that the first feature whose geometry is bad is named.
-        .collect::<Vec<Result<Region, Error>>>()
-        .into_iter()
-        .collect()
+    crate::core::first_error_in_order(read.into_par_iter().map(|(mut region, bytes)| {
+        region.geometry =
+            crate::wkb::to_multi_polygon(&bytes).map_err(|_| cannot_read(&region.id))?;
+        if (region.geometry.coords_iter()).any(|p| !(p.x.is_finite() && p.y.is_finite())) {
+            return Err(Error::input(
+                Some(&region.id),
+                "the geometry has a NaN or infinite coordinate",
+            ));
+        }
+        Ok(region)
+    }))
 }
