@@ -20,6 +20,7 @@ use rstar::primitives::{GeomWithData, Line, Rectangle};
 use rstar::{RTree, RTreeObject, AABB};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
+use std::sync::{Mutex, PoisonError};
 
 /// When two regions' boundaries share a border: where they run within `reach` of each other for
 /// a length above `least` (both in cells).
@@ -105,14 +106,15 @@ pub struct Prepared {
 /// (method.md §8) and the user read adjacency off the boundaries as drawn, and a repair can drop
 /// a sliver of no area that runs along a neighbour (an out-and-back stretch of border whose two
 /// sides cross), and with it the shared border;
-/// `reached` hears the share of the work done as the costly stages begin (the adjacency, union
-/// and simplification, side by side, most of it on dense boundaries) and as they end.
+/// `reached` hears the share of the work done as the costly stages (the adjacency, union and
+/// simplification, side by side, most of it on dense boundaries) begin and end, from whichever
+/// thread ends one.
 pub fn prepare(
     regions: &[&MultiPolygon<f64>],
     drawn: &[&MultiPolygon<f64>],
     valid_here: &[bool],
     params: &Params,
-    reached: &dyn Fn(f64, &str),
+    reached: &(dyn Fn(f64, &str) + Sync),
 ) -> Prepared {
     let centroids: Vec<Coord<f64>> = regions.iter().map(|r| centroid(r)).collect();
     let area_centroids = regions
@@ -122,24 +124,30 @@ pub fn prepare(
         .collect();
     // A repair stays within the box of the region as drawn: the drawn boxes group both.
     let clusters = clusters(drawn, SHARED.reach);
-    reached(0.05, "outline: adjacency, union and simplification");
+    reached(0.05, "outline: adjacency and union");
     // The borders as drawn give the adjacency, and the union of the regions gives the outline:
     // the two do not meet, and on a dense boundary each is a few tenths of a second that one
     // core spends mostly alone (BENCHMARKS.md "Dense boundaries"), so they run side by side.
+    let stages = SideBySide::new(reached);
     let (adjacency, (regions_union, landmass_of, simplified, joined)) = rayon::join(
-        || adjacency(drawn, &clusters, params.point_adjacency, SHARED),
+        || {
+            let adjacency = adjacency(drawn, &clusters, params.point_adjacency, SHARED);
+            stages.ended(Stage::Adjacency);
+            adjacency
+        },
         || {
             let regions_union = merge(regions, valid_here, &clusters);
             let landmass_of = landmasses(regions, &regions_union, &centroids);
             let union = clean(regions_union.clone(), &centroids);
+            stages.ended(Stage::Union);
             // Small layers still keep a quadrilateral per ring on average.
             let target = ((params.vertices_per_region * regions.len() as f64).ceil() as usize)
                 .max(4 * rings_of(&union).len());
             let (simplified, joined) = simplify(&union, target, params.simplify_tolerance);
+            stages.ended(Stage::Simplification);
             (regions_union, landmass_of, simplified, joined)
         },
     );
-    reached(0.95, "outline");
     // Parts joined across hairline gaps: their regions' borders lie across the gaps too.
     let neighbours = if joined {
         let near = self::adjacency(
@@ -171,6 +179,72 @@ pub fn prepare(
         neighbours,
         rings,
         part_of,
+    }
+}
+
+/// The outline's costly stages, which run side by side.
+#[derive(Clone, Copy)]
+enum Stage {
+    Adjacency,
+    Union,
+    Simplification,
+}
+
+impl Stage {
+    const ALL: [Stage; 3] = [Stage::Adjacency, Stage::Union, Stage::Simplification];
+
+    fn name(self) -> &'static str {
+        match self {
+            Stage::Adjacency => "adjacency",
+            Stage::Union => "union",
+            Stage::Simplification => "simplification",
+        }
+    }
+
+    /// The stage's share of the outline's work: each is a few tenths of a second at 10⁶
+    /// vertices, the adjacency the longest on us_states, the simplification on a star of
+    /// long spikes (BENCHMARKS.md "Dense boundaries").
+    fn share(self) -> f64 {
+        match self {
+            Stage::Adjacency => 0.4,
+            Stage::Union | Stage::Simplification => 0.3,
+        }
+    }
+}
+
+/// Reports the outline's share done as each [`Stage`] ends, in whichever order they end, and
+/// names those still running.
+struct SideBySide<'r> {
+    reached: &'r (dyn Fn(f64, &str) + Sync),
+    ended: Mutex<[bool; 3]>,
+}
+
+impl<'r> SideBySide<'r> {
+    fn new(reached: &'r (dyn Fn(f64, &str) + Sync)) -> Self {
+        SideBySide {
+            reached,
+            ended: Mutex::new([false; 3]),
+        }
+    }
+
+    fn ended(&self, stage: Stage) {
+        // Reported under the lock, so that the shares heard only grow.
+        let mut ended = self.ended.lock().unwrap_or_else(PoisonError::into_inner);
+        ended[stage as usize] = true;
+        let done: f64 = (Stage::ALL.iter().zip(ended.iter()))
+            .filter(|(_, &e)| e)
+            .map(|(s, _)| s.share())
+            .sum();
+        let running: Vec<&str> = (Stage::ALL.iter().zip(ended.iter()))
+            .filter(|(_, &e)| !e)
+            .map(|(s, _)| s.name())
+            .collect();
+        let message = if running.is_empty() {
+            "outline".to_owned()
+        } else {
+            format!("outline: {}", running.join(" and "))
+        };
+        (self.reached)(0.05 + 0.9 * done, &message);
     }
 }
 
