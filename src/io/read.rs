@@ -328,8 +328,11 @@ pub(crate) fn regions(
             };
             Ok((region, bytes))
         })
-        .collect::<Result<Vec<(Region, Vec<u8>)>, Error>>()?;
-    crate::core::first_error_in_order(read.into_par_iter().map(|(mut region, bytes)| {
+        // A feature GDAL cannot project is reported in its turn, after any earlier one whose
+        // bytes turn out bad below.
+        .collect::<Vec<Result<(Region, Vec<u8>), Error>>>();
+    crate::core::first_error_in_order(read.into_par_iter().map(|read| {
+        let (mut region, bytes) = read?;
         region.geometry =
             crate::wkb::to_multi_polygon(&bytes).map_err(|_| cannot_read(&region.id))?;
         if (region.geometry.coords_iter()).any(|p| !(p.x.is_finite() && p.y.is_finite())) {
