@@ -88,7 +88,7 @@ pub fn refine(
     let best = if stripes == 1 {
         anneal(&problem, cells, params, seed, tick)?.0
     } else {
-        anneal_in_stripes(layout, &links, &far, cells, params, seed, stripes, tick)?
+        anneal_in_stripes(&problem, cells, params, seed, stripes, tick)?
     };
     // The search tracks its energy as a sum of many deltas; comparing exact totals makes the
     // promise never to return a worse state hold even to the last bit.
@@ -358,13 +358,11 @@ impl Stripes {
 /// The refinement of `cells` in [`PHASES`] phases, each annealing `stripes` stripes of the
 /// board at once (their regions only, in their share of the schedule, each from its own seed)
 /// and keeping each stripe's best state. A region is frozen for a phase when its cell lies in a
-/// band or a neighbour's cell lies in another stripe, so that no pair term is shared. The result
-/// depends on the seed and the input, not on the threads.
-#[allow(clippy::too_many_arguments)]
+/// band or a neighbour's cell lies in another stripe, so that no pair term is shared. Each
+/// stripe anneals a fresh copy of `problem` ([`Problem::fresh`]). The result depends on the
+/// seed and the input, not on the threads.
 fn anneal_in_stripes(
-    layout: &Layout,
-    links: &Links,
-    far: &[f64],
+    problem: &Problem,
     cells: &[usize],
     params: &Params,
     seed: u64,
@@ -372,7 +370,7 @@ fn anneal_in_stripes(
     tick: Tick,
 ) -> Option<Vec<usize>> {
     use rayon::prelude::*;
-    let lattice = layout.lattice;
+    let lattice = problem.layout.lattice;
     let n = cells.len();
     let position = |index: usize| (lattice.cells[index].col, lattice.cells[index].row);
     let mut at = cells.to_vec();
@@ -380,7 +378,6 @@ fn anneal_in_stripes(
     for phase in 0..PHASES {
         let positions: Vec<Position> = at.iter().map(|&k| position(k)).collect();
         let split = Stripes::of(phase, stripes, &positions);
-        let problem = Problem::new(layout, params, links, far);
         let owner: Vec<Option<usize>> = (0..n)
             .map(|region| {
                 let stripe = split.owner(positions[region])?;
@@ -401,11 +398,12 @@ fn anneal_in_stripes(
             .collect();
         let total: usize = budgets.iter().sum();
         let board = Board::new(lattice, &at, lattice.cells.len());
-        let terms = Terms::of(&problem, &board);
+        let terms = Terms::of(problem, &board);
         let schedule = (phase as f64 / PHASES as f64, 1.0 / PHASES as f64);
-        let results = (0..split.count())
-            .into_par_iter()
-            .map(|stripe| {
+        // A problem per stripe: its cache of landmass answers is for one thread.
+        let problems: Vec<Problem> = (0..split.count()).map(|_| problem.fresh()).collect();
+        let results = (problems.into_par_iter().enumerate())
+            .map(|(stripe, problem)| {
                 let (regions, moves) = (&owned[stripe], budgets[stripe]);
                 if regions.is_empty() || moves == 0 {
                     return Some(None);
@@ -420,7 +418,6 @@ fn anneal_in_stripes(
                     temperature: params.refine_temperature,
                 };
                 let weight = moves as f64 / total as f64 / PHASES as f64;
-                let problem = Problem::new(layout, params, links, far);
                 let (best, _) =
                     search.run(&problem, board.clone(), terms.clone(), 0.0, &|share| {
                         tick(share * weight)
@@ -444,6 +441,7 @@ fn anneal_in_stripes(
 /// The refinement's energy of one adjacent pair (method.md §6b): a lost neighbour, the
 /// direction error and a misdirection. Landmass blocks are placed by it too
 /// ([`super::landmass::settle`]).
+#[derive(Clone)]
 pub(crate) struct PairWeights {
     tiling: Tiling,
     adjacent: f64,
@@ -571,6 +569,15 @@ impl<'a> Problem<'a> {
             first: &links.first,
             reverse: &links.reverse,
             misplaced: RefCell::default(),
+        }
+    }
+
+    /// The same problem with its cache of landmass answers empty, for another thread.
+    fn fresh(&self) -> Problem<'a> {
+        Problem {
+            pairs: self.pairs.clone(),
+            misplaced: RefCell::default(),
+            ..*self
         }
     }
 
@@ -1521,17 +1528,9 @@ mod tests {
         let params = Params::default();
         let links = Links::of(&layout);
         let pool = map.lattice.cells.len();
-        let striped = anneal_in_stripes(
-            &layout,
-            &links,
-            &far_from_home(&layout, &cells, &params),
-            &cells,
-            &params,
-            3,
-            4,
-            &|_| true,
-        )
-        .unwrap();
+        let far = far_from_home(&layout, &cells, &params);
+        let problem = Problem::new(&layout, &params, &links, &far);
+        let striped = anneal_in_stripes(&problem, &cells, &params, 3, 4, &|_| true).unwrap();
         let whole = refine(&layout, &cells, &params, 3, &|_| true).unwrap();
         assert!(distinct(&striped) && striped.iter().all(|&c| c < pool));
         let (before, after) = (shape(&map.lattice, &cells), shape(&map.lattice, &striped));
@@ -1559,8 +1558,10 @@ mod tests {
         };
         let links = Links::of(&layout);
         let far = far_from_home(&layout, &cells, &params);
-        let striped =
-            |tick: Tick| anneal_in_stripes(&layout, &links, &far, &cells, &params, 5, 3, tick);
+        let striped = |tick: Tick| {
+            let problem = Problem::new(&layout, &params, &links, &far);
+            anneal_in_stripes(&problem, &cells, &params, 5, 3, tick)
+        };
         let on = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
