@@ -158,5 +158,7 @@ markdown_rows() {
     echo "| R tilemaps 0.2.2 | .879 / 26.7 / .809 / .913 | .892 / 24.5 / .563 / .909 | .787 / 27.4 / .939 / .927 | fails |"
     echo "| carto-flow | .888 / 24.3 / .782 / .886 | .870 / 27.0 / .728 / .877 | .847 / 29.4 / .986 / .887 | .735 / 43.7 / 1.79 / .810 |"
     echo "| New York Times, hand-made | .897 / 22.1 / .864 / .899; 1 piece, 0 holes, 1 notch, false neighbours .338 | | | |"
+    echo
+    cat "$root/scripts/location-bound.md"
 } > "$out"
 echo "$out"
