@@ -3,9 +3,13 @@
 //! - GDAL's messages are caught instead of printed: errors become our one-line [`Error`]s,
 //!   warnings become notes of the run;
 //! - formats that store "now" (GeoPackage's `last_change` and metadata timestamps) store a fixed
-//!   date, so two runs give the same bytes.
+//!   date, so two runs give the same bytes;
+//! - the SQLite-based formats (GeoPackage, SQLite) do not sync to the disk at each commit of
+//!   their journal (28 times for one GeoPackage layer): every run writes into a staged copy
+//!   that is nobody's until it is synced once and moved into place (`commit`), so those syncs
+//!   protected nothing, and on a network drive each costs milliseconds.
 //!
-//! Both are per thread in GDAL (an error-handler stack and a thread-local configuration option),
+//! All are per thread in GDAL (an error-handler stack and thread-local configuration options),
 //! and a run calls GDAL from one thread only (the core's worker threads never do).
 
 use crate::core::Error;
@@ -16,7 +20,12 @@ use std::marker::PhantomData;
 
 /// The date written wherever a format stores the time of writing.
 pub(crate) const FIXED_DATE: &str = "2000-01-01T00:00:00Z";
-const DATE_OPTION: &str = "OGR_CURRENT_DATE";
+
+/// The configuration options a session sets on its thread, with their values.
+const OPTIONS: [(&str, &str); 2] = [
+    ("OGR_CURRENT_DATE", FIXED_DATE),
+    ("OGR_SQLITE_SYNCHRONOUS", "OFF"),
+];
 
 /// What GDAL said on this thread since the session started.
 #[derive(Default)]
@@ -57,10 +66,11 @@ unsafe extern "C" fn catch(class: gdal_sys::CPLErr::Type, _number: c_int, messag
     });
 }
 
-/// Open while a run talks to GDAL; dropping it restores GDAL's previous handler and date. Not
-/// `Send`: the handler it pushed belongs to this thread.
+/// Open while a run talks to GDAL; dropping it restores GDAL's previous handler and options.
+/// Not `Send`: the handler it pushed belongs to this thread.
 pub(crate) struct Session {
-    previous_date: String,
+    /// Per option of [`OPTIONS`], its thread-local value before the session ("": none).
+    previous: Vec<String>,
     _this_thread: PhantomData<*const ()>,
 }
 
@@ -70,12 +80,17 @@ impl Session {
         // SAFETY: `catch` has the signature GDAL expects and never unwinds; the matching
         // CPLPopErrorHandler runs in `drop`, on this same thread (the session is not `Send`).
         unsafe { gdal_sys::CPLPushErrorHandler(Some(catch)) };
-        let previous_date =
-            gdal::config::get_thread_local_config_option(DATE_OPTION, "").unwrap_or_default();
-        // Cannot fail: both strings are free of NUL bytes.
-        let _ = gdal::config::set_thread_local_config_option(DATE_OPTION, FIXED_DATE);
+        let previous = (OPTIONS.iter())
+            .map(|&(option, value)| {
+                let previous =
+                    gdal::config::get_thread_local_config_option(option, "").unwrap_or_default();
+                // Cannot fail: the strings are free of NUL bytes.
+                let _ = gdal::config::set_thread_local_config_option(option, value);
+                previous
+            })
+            .collect();
         Session {
-            previous_date,
+            previous,
             _this_thread: PhantomData,
         }
     }
@@ -121,12 +136,44 @@ impl Session {
 
 impl Drop for Session {
     fn drop(&mut self) {
-        let _ = if self.previous_date.is_empty() {
-            gdal::config::clear_thread_local_config_option(DATE_OPTION)
-        } else {
-            gdal::config::set_thread_local_config_option(DATE_OPTION, &self.previous_date)
-        };
+        for (&(option, _), previous) in OPTIONS.iter().zip(&self.previous) {
+            let _ = if previous.is_empty() {
+                gdal::config::clear_thread_local_config_option(option)
+            } else {
+                gdal::config::set_thread_local_config_option(option, previous)
+            };
+        }
         // SAFETY: pops the handler `start` pushed on this thread.
         unsafe { gdal_sys::CPLPopErrorHandler() };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gdal::config::{
+        clear_thread_local_config_option, get_thread_local_config_option,
+        set_thread_local_config_option,
+    };
+
+    #[test]
+    fn a_session_sets_its_options_on_its_thread_and_gives_the_host_its_own_back() {
+        // The host (QGIS, through the C API) has its own value for one option, none for the other.
+        set_thread_local_config_option("OGR_SQLITE_SYNCHRONOUS", "NORMAL").unwrap();
+        clear_thread_local_config_option("OGR_CURRENT_DATE").unwrap();
+        let value = |option| get_thread_local_config_option(option, "").unwrap();
+        {
+            let _session = Session::start();
+            assert_eq!(value("OGR_SQLITE_SYNCHRONOUS"), "OFF");
+            assert_eq!(value("OGR_CURRENT_DATE"), FIXED_DATE);
+            // Other threads (the host's) are untouched.
+            let elsewhere = std::thread::spawn(move || {
+                get_thread_local_config_option("OGR_SQLITE_SYNCHRONOUS", "").unwrap()
+            });
+            assert_eq!(elsewhere.join().unwrap(), "");
+        }
+        assert_eq!(value("OGR_SQLITE_SYNCHRONOUS"), "NORMAL");
+        assert_eq!(value("OGR_CURRENT_DATE"), "");
+        clear_thread_local_config_option("OGR_SQLITE_SYNCHRONOUS").unwrap();
     }
 }
