@@ -27,7 +27,7 @@
 
 Every layer is a GeoPackage with one layer named like the file, a text field `id`, projected
 coordinates in metres (EPSG:3857 for the generated ones, the source's for densify). The same
-arguments give the same file. Needs shapely, numpy and pyogrio.
+arguments give the same file. Needs shapely, numpy, pyogrio and pyproj.
 """
 
 import math
@@ -36,6 +36,7 @@ import sys
 
 import numpy as np
 import pyogrio.raw
+import pyproj
 import shapely
 import shapely.affinity
 
@@ -180,17 +181,18 @@ def strip(n, seed):
     return [f"s{k}" for k in range(n)], cells
 
 
-def wiggled(a, b, pieces):
+def wiggled(a, b, pieces, straight=lambda a, b: False):
     """The points between `a` and `b` (exclusive) on a wiggle that depends only on the segment,
-    not on its direction: both regions beside a shared edge get the same vertices."""
+    not on its direction: both regions beside a shared edge get the same vertices. A segment
+    `straight` tells apart is only cut up."""
     if (a[0], a[1]) > (b[0], b[1]):
-        return wiggled(b, a, pieces)[::-1]
+        return wiggled(b, a, pieces, straight)[::-1]
     (ax, ay), (bx, by) = a, b
     length = math.hypot(bx - ax, by - ay)
     if length == 0:
         return []
     nx, ny = -(by - ay) / length, (bx - ax) / length
-    amplitude = 0.02 * length
+    amplitude = 0.0 if straight(a, b) else 0.02 * length
     out = []
     for k in range(1, pieces):
         t = k / pieces
@@ -199,21 +201,28 @@ def wiggled(a, b, pieces):
     return out
 
 
-def densify_ring(coords, pieces):
+def densify_ring(coords, pieces, straight):
     coords = list(coords)
     out = []
     for a, b in zip(coords[:-1], coords[1:]):
         out.append(a)
-        out.extend(wiggled(a, b, pieces))
+        out.extend(wiggled(a, b, pieces, straight))
     out.append(coords[-1])
     return out
 
 
-def densify_polygon(polygon, pieces):
+def densify_polygon(polygon, pieces, straight):
     return shapely.Polygon(
-        densify_ring(polygon.exterior.coords, pieces),
-        [densify_ring(r.coords, pieces) for r in polygon.interiors],
+        densify_ring(polygon.exterior.coords, pieces, straight),
+        [densify_ring(r.coords, pieces, straight) for r in polygon.interiors],
     )
+
+
+def on_the_world_edge(a, b):
+    """Whether a segment in longitude and latitude runs along the antimeridian or a pole's
+    parallel: wiggled, it would leave the world."""
+    near = lambda v, edge: abs(abs(v) - edge) < 1e-3  # a projected layer's edge, 4326 again
+    return any(near(a[k], e) and near(b[k], e) for k, e in ((0, 180.0), (1, 90.0)))
 
 
 def densify(src, vertices):
@@ -222,10 +231,12 @@ def densify(src, vertices):
     geometries = list(shapely.from_wkb(wkb))
     have = sum(shapely.get_num_coordinates(g) for g in geometries)
     pieces = max(1, round(vertices / have))
+    geographic = info["crs"] is not None and pyproj.CRS(info["crs"]).is_geographic
+    straight = on_the_world_edge if geographic else (lambda a, b: False)
     out = []
     for g in geometries:
         parts = g.geoms if g.geom_type == "MultiPolygon" else [g]
-        out.append(shapely.MultiPolygon([densify_polygon(p, pieces) for p in parts]))
+        out.append(shapely.MultiPolygon([densify_polygon(p, pieces, straight) for p in parts]))
     return [str(v) for v in fields[0]], out, info["crs"]
 
 

@@ -62,9 +62,29 @@ pub fn problem(geometry: &MultiPolygon<f64>) -> Option<Problem> {
     check(geometry, |index| index.crowded())
 }
 
+/// Whether the geometry's segments crowd its bounding box (see [`CROWDED`]): long segments
+/// whose boxes overlap, like a star's spikes, which any sweep meets most of at once. A geometry
+/// with a ring of fewer than three distinct vertices is not.
+pub fn crowded(geometry: &MultiPolygon<f64>) -> bool {
+    rings_of(geometry).is_some_and(|(rings, _)| Runs::new(&rings).crowded())
+}
+
 /// The problem, found by the sweep where `sweep` says so, else by comparing nearby pairs.
 fn check(geometry: &MultiPolygon<f64>, sweep: impl Fn(&Runs) -> bool) -> Option<Problem> {
-    let mut rings: Vec<Vec<Coord<f64>>> = Vec::new();
+    let Some((rings, roles)) = rings_of(geometry) else {
+        return Some(Problem::TooFewPoints);
+    };
+    let index = Runs::new(&rings);
+    first_contact(&index, &rings, sweep(&index)).or_else(|| nesting(&index, &rings, &roles))
+}
+
+/// Rings as the checks take them: open, without repeated vertices.
+type Rings = Vec<Vec<Coord<f64>>>;
+
+/// The geometry's rings with their roles; `None` if a ring has fewer than three distinct
+/// vertices.
+fn rings_of(geometry: &MultiPolygon<f64>) -> Option<(Rings, Vec<RingRole>)> {
+    let mut rings: Rings = Vec::new();
     let mut roles: Vec<RingRole> = Vec::new();
     for (polygon, p) in geometry.0.iter().enumerate() {
         let shell = std::iter::once((p.exterior(), true));
@@ -77,7 +97,7 @@ fn check(geometry: &MultiPolygon<f64>, sweep: impl Fn(&Runs) -> bool) -> Option<
                 coords.pop();
             }
             if coords.len() < 3 {
-                return Some(Problem::TooFewPoints);
+                return None;
             }
             rings.push(coords);
             roles.push(RingRole {
@@ -86,8 +106,7 @@ fn check(geometry: &MultiPolygon<f64>, sweep: impl Fn(&Runs) -> bool) -> Option<
             });
         }
     }
-    let index = Runs::new(&rings);
-    first_contact(&index, &rings, sweep(&index)).or_else(|| nesting(&index, &rings, &roles))
+    Some((rings, roles))
 }
 
 /// How many runs' boxes cover a point of the geometry's box, on average, above which the
@@ -787,6 +806,7 @@ mod tests {
         let rings = vec![coords.clone()];
         assert!(Runs::new(&rings).crowded());
         let star = |c: &[Coord<f64>]| Polygon::new(geo::LineString(c.to_vec()), vec![]);
+        assert!(crowded(&MultiPolygon(vec![star(&coords)])));
         assert_eq!(check(star(&coords)), None);
         let t = 3.0 / n as f64 * std::f64::consts::TAU;
         coords[0] = Coord {
@@ -803,7 +823,9 @@ mod tests {
                 [(s, 0.0), (1.0, s), (1.0 - s, 1.0), (0.0, 1.0 - s)][k / (n / 4)].into()
             })
             .collect();
-        assert!(!Runs::new(&[square]).crowded());
+        assert!(!Runs::new(std::slice::from_ref(&square)).crowded());
+        let square = Polygon::new(geo::LineString(square), vec![]);
+        assert!(!crowded(&MultiPolygon(vec![square])));
     }
 
     #[test]
