@@ -337,9 +337,8 @@ impl Outlines {
 /// The `count` free positions whose centres lie nearest to `outline` (ties by row, then
 /// column), marked as taken, with score 0; positions nearer one of the `others` outlines than
 /// to this one come only after all that are not, so that a small landmass grows away from its
-/// neighbours rather than towards them; after the first, those beside the ones taken come
-/// first ([`together`]). Searched in squares of growing size around the outline's bounding
-/// box, so the work follows the positions handed out.
+/// neighbours rather than towards them. Searched in squares of growing size around the
+/// outline's bounding box, so the work follows the positions handed out.
 fn nearest_free(
     lattice: &Lattice,
     outline: &MultiPolygon<f64>,
@@ -404,12 +403,9 @@ fn nearest_free(
         let searched_enough =
             enough_at.is_some_and(|first| margin > (4 * (count as i32 + 1)).min(4 * first));
         if own_side >= count || searched_enough {
-            let positions: Vec<Position> =
-                free.iter().map(|&(_, _, _, row, col)| (col, row)).collect();
-            let touching = |p: Position| touches_another(lattice, taken, p, part);
-            return together(lattice.tiling, &positions, count, touching)
-                .into_iter()
-                .map(|(col, row)| {
+            return free[..count]
+                .iter()
+                .map(|&(_, _, _, row, col)| {
                     taken.insert((col, row), part);
                     LatticeCell {
                         col,
@@ -422,46 +418,6 @@ fn nearest_free(
         }
         margin *= 2;
     }
-}
-
-/// `count` of `positions` (best first), each after the first taken from those sharing an edge
-/// with the ones already taken where any does, best first among them, those `touching` another
-/// landmass last: a small landmass of several regions (Cyprus, two countries) stays one block.
-/// The nearest positions on its own side of the oceans, taken one by one, lay Cyprus's two
-/// cells seven rows apart, one on each side of Turkey; [`settle`] then moves the block as a
-/// whole to where its regions lie on their own landmass.
-fn together(
-    tiling: Tiling,
-    positions: &[Position],
-    count: usize,
-    touching: impl Fn(Position) -> bool,
-) -> Vec<Position> {
-    let index: FxHashMap<Position, usize> =
-        positions.iter().enumerate().map(|(k, &p)| (p, k)).collect();
-    let mut used = vec![false; positions.len()];
-    // The free positions beside those taken, by (touching another landmass, rank).
-    let mut beside: std::collections::BTreeSet<(bool, usize)> = Default::default();
-    let mut next_best = 0;
-    let mut taken = Vec::with_capacity(count);
-    while taken.len() < count.min(positions.len()) {
-        let k = match beside.pop_first() {
-            Some((_, k)) => k,
-            None => {
-                while used[next_best] {
-                    next_best += 1;
-                }
-                next_best
-            }
-        };
-        used[k] = true;
-        taken.push(positions[k]);
-        for n in tiling.edge_neighbours(positions[k]).iter() {
-            if let Some(&j) = index.get(n).filter(|&&j| !used[j]) {
-                beside.insert((touching(positions[j]), j));
-            }
-        }
-    }
-    taken
 }
 
 /// Whether `at` shares an edge with a position handed out to another part than `part`, for the
@@ -865,29 +821,6 @@ impl Block<'_> {
 mod tests {
     use super::*;
     use crate::core::grid::frame;
-
-    #[test]
-    fn a_small_landmass_takes_positions_beside_each_other() {
-        // Best first: (0, 0), then (0, 7) on the far side of a neighbour (as Cyprus's second
-        // cell was), then (1, 0) beside the first, then (0, 1) beside it too but touching
-        // another landmass.
-        let positions = [(0, 0), (0, 7), (0, 1), (1, 0), (5, 5)];
-        let touching = |p: Position| p == (0, 1);
-        assert_eq!(
-            together(Tiling::Square, &positions, 2, touching),
-            vec![(0, 0), (1, 0)]
-        );
-        assert_eq!(
-            together(Tiling::Square, &positions, 3, touching),
-            vec![(0, 0), (1, 0), (0, 1)]
-        );
-        // Nothing beside the block is left: the next best.
-        assert_eq!(
-            together(Tiling::Square, &positions, 5, touching),
-            vec![(0, 0), (1, 0), (0, 1), (0, 7), (5, 5)]
-        );
-        assert_eq!(together(Tiling::Square, &positions, 9, touching).len(), 5);
-    }
     use crate::core::params::HexOrientation;
     use geo::{LineString, Polygon};
     use std::collections::HashSet;
