@@ -511,8 +511,8 @@ struct Checked {
 
 /// Refuses what the method cannot work with, naming the feature. An invalid polygon (a ring that
 /// crosses itself, a spike, overlapping parts) is repaired as GIS tools do (the even-odd rule of
-/// geo's `MakeValid` and of GEOS's linework repair) and named in a note, because a digitising slip should not stop a map; only one with no area
-/// left is refused. The geometries are checked in parallel; the first error in input order is
+/// geo's `MakeValid` and of GEOS's linework repair) and named in a note, because a digitising
+/// slip should not stop a map; only one with no area left is refused. The geometries are checked in parallel; the first error in input order is
 /// the one reported (the ids and coordinates of all regions before any polygon's validity).
 ///
 /// Validity, the costly check (O(n log n) in the vertices), is checked once per region, where
@@ -667,9 +667,8 @@ fn repaired(region: &Region) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Probl
 /// `polygons` in one order whatever the order they came in: each ring starting at its lowest
 /// vertex (x, then y), holes and polygons in the order of their lowest vertices. geo's
 /// `MakeValid` traces the repaired rings from a hash set, so their start and order change from
-/// one call to the next, and the overlay's follow where the input's rings start; with them
-/// would change the layer's summed area in its last bits, the cell size and every coordinate
-/// written.
+/// one call to the next, and the overlay's follow where the input's rings start; either would
+/// change the layer's summed area in its last bits, the cell size and every coordinate written.
 fn canonical(polygons: MultiPolygon<f64>) -> MultiPolygon<f64> {
     // The lowest vertex then comes first, and orders the rings.
     let rotated = |ring: &LineString<f64>| {
