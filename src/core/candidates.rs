@@ -512,8 +512,9 @@ struct Checked {
 /// Refuses what the method cannot work with, naming the feature. An invalid polygon (a ring that
 /// crosses itself, a spike, overlapping parts) is repaired as GIS tools do (the even-odd rule of
 /// geo's `MakeValid` and of GEOS's linework repair) and named in a note, because a digitising
-/// slip should not stop a map; only one with no area left is refused. The geometries are checked in parallel; the first error in input order is
-/// the one reported (the ids and coordinates of all regions before any polygon's validity).
+/// slip should not stop a map; only one with no area left is refused. The geometries are
+/// checked in parallel; the first error in input order is the one reported (the ids and
+/// coordinates of all regions before any polygon's validity).
 ///
 /// Validity, the costly check (O(n log n) in the vertices), is checked once per region, where
 /// the method computes: in the unit-cell frame, the regions placed as if none needed a repair.
