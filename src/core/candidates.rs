@@ -634,7 +634,8 @@ fn admit(region: &Region) -> Result<(), Error> {
 /// there (with what was wrong).
 fn repaired(region: &Region) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Problem>), Error> {
     let id = region.id.as_str();
-    let Some(problem) = validity::problem(&region.geometry) else {
+    let examined = validity::examine(&region.geometry);
+    let Some(problem) = examined.problem else {
         if !has_area(&region.geometry) {
             return Err(Error::input(Some(id), "the polygon has no area"));
         }
@@ -645,7 +646,7 @@ fn repaired(region: &Region) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Probl
     // on boundaries as drawn: Greenland at 98,906 vertices in 0.03 s, where `MakeValid` took
     // 4–8 s, splitting its rings at pinch points in O(n²). Among crowded long segments (a star's
     // spikes) the overlay's sweep grows faster still, so those keep `MakeValid`.
-    let repaired = if validity::crowded(&region.geometry) {
+    let repaired = if examined.crowded {
         region.geometry.make_valid().map_err(|e| {
             Error::input(
                 Some(id),
@@ -1494,7 +1495,7 @@ mod tests {
             ("dense", dense),
         ] {
             let region = region(ring);
-            assert!(!validity::crowded(&region.geometry), "{name}");
+            assert!(!validity::examine(&region.geometry).crowded, "{name}");
             let (ours, problem) = repaired(&region).unwrap();
             assert!(problem.is_some(), "{name}");
             let theirs = region.geometry.make_valid().unwrap();

@@ -59,23 +59,39 @@ struct RingRole {
 
 /// `None` for a valid geometry (finite coordinates assumed), else the first problem found.
 pub fn problem(geometry: &MultiPolygon<f64>) -> Option<Problem> {
-    check(geometry, |index| index.crowded())
+    examine(geometry).problem
 }
 
-/// Whether the geometry's segments crowd its bounding box (see [`CROWDED`]): long segments
-/// whose boxes overlap, like a star's spikes, which any sweep meets most of at once. A geometry
-/// with a ring of fewer than three distinct vertices is not.
-pub fn crowded(geometry: &MultiPolygon<f64>) -> bool {
-    rings_of(geometry).is_some_and(|(rings, _)| Runs::new(&rings).crowded())
+/// What checking a geometry finds: its first problem (`None`: valid), and whether its segments
+/// crowd its bounding box (see [`CROWDED`]): long segments whose boxes overlap, like a star's
+/// spikes, which any sweep meets most of at once. A repair chooses its method by that.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Examined {
+    pub problem: Option<Problem>,
+    pub crowded: bool,
 }
 
-/// The problem, found by the sweep where `sweep` says so, else by comparing nearby pairs.
-fn check(geometry: &MultiPolygon<f64>, sweep: impl Fn(&Runs) -> bool) -> Option<Problem> {
+/// The geometry checked, the problem found by the sweep where its segments crowd, else by
+/// comparing nearby pairs; a ring of fewer than three distinct vertices is not crowded.
+pub fn examine(geometry: &MultiPolygon<f64>) -> Examined {
+    examined(geometry, |index| index.crowded())
+}
+
+/// [`examine`], the problem found by the sweep where `sweep` says so.
+fn examined(geometry: &MultiPolygon<f64>, sweep: impl Fn(&Runs) -> bool) -> Examined {
     let Some((rings, roles)) = rings_of(geometry) else {
-        return Some(Problem::TooFewPoints);
+        return Examined {
+            problem: Some(Problem::TooFewPoints),
+            crowded: false,
+        };
     };
     let index = Runs::new(&rings);
-    first_contact(&index, &rings, sweep(&index)).or_else(|| nesting(&index, &rings, &roles))
+    let problem =
+        first_contact(&index, &rings, sweep(&index)).or_else(|| nesting(&index, &rings, &roles));
+    Examined {
+        problem,
+        crowded: index.crowded(),
+    }
 }
 
 /// Rings as the checks take them: open, without repeated vertices.
@@ -760,8 +776,8 @@ mod tests {
                     })
                     .collect(),
             );
-            let by_sweep = super::check(&geometry, |_| true);
-            let by_pairs = super::check(&geometry, |_| false);
+            let by_sweep = super::examined(&geometry, |_| true).problem;
+            let by_pairs = super::examined(&geometry, |_| false).problem;
             assert_eq!(
                 by_sweep.is_none(),
                 by_pairs.is_none(),
@@ -806,7 +822,7 @@ mod tests {
         let rings = vec![coords.clone()];
         assert!(Runs::new(&rings).crowded());
         let star = |c: &[Coord<f64>]| Polygon::new(geo::LineString(c.to_vec()), vec![]);
-        assert!(crowded(&MultiPolygon(vec![star(&coords)])));
+        assert!(examine(&MultiPolygon(vec![star(&coords)])).crowded);
         assert_eq!(check(star(&coords)), None);
         let t = 3.0 / n as f64 * std::f64::consts::TAU;
         coords[0] = Coord {
@@ -825,7 +841,7 @@ mod tests {
             .collect();
         assert!(!Runs::new(std::slice::from_ref(&square)).crowded());
         let square = Polygon::new(geo::LineString(square), vec![]);
-        assert!(!crowded(&MultiPolygon(vec![square])));
+        assert!(!examine(&MultiPolygon(vec![square])).crowded);
     }
 
     #[test]
