@@ -16,9 +16,10 @@ At RATIO 1 the cells fill the landmass's own outline: no layout that keeps the o
 place the regions much nearer on average. Smaller cells let the regions stay nearer home at
 the price of a layout that falls apart where the regions are large. No Snake, no refinement:
 this is a yardstick for the core's figures, not a layout. Needs shapely, numpy, pyogrio,
-scipy.
+scipy, and the shared judge beside the project (../shared/eval).
 """
 
+import os
 import sys
 
 import numpy as np
@@ -26,6 +27,10 @@ import pyogrio
 import shapely
 from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
+
+# The shared judge's own fit (../shared/eval beside the project), so C_location is its figure.
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "shared", "eval"))
+from gridmap_eval import fit_scale_translation  # noqa: E402
 
 
 def lattice(part, side):
@@ -40,12 +45,10 @@ def lattice(part, side):
 
 
 def judged_location(region_centres, cell_centres, side):
-    """C_location of method.md §8: cells fitted onto the regions by a least-squares scale and
-    shift, distances in fitted cells."""
-    ms, md = cell_centres.mean(0), region_centres.mean(0)
-    a, b = cell_centres - ms, region_centres - md
-    scale = (a * b).sum() / (a * a).sum()
-    fitted = cell_centres * scale + (md - scale * ms)
+    """C_location of method.md §8: cells fitted onto the regions by the judge's least-squares
+    scale and shift, distances in fitted cells."""
+    scale, shift = fit_scale_translation(cell_centres, region_centres)
+    fitted = cell_centres * scale + shift
     return np.hypot(*(region_centres - fitted).T) / (side * abs(scale))
 
 

@@ -181,7 +181,7 @@ def strip(n, seed):
     return [f"s{k}" for k in range(n)], cells
 
 
-def wiggled(a, b, pieces, straight=lambda a, b: False):
+def wiggled(a, b, pieces, straight):
     """The points between `a` and `b` (exclusive) on a wiggle that depends only on the segment,
     not on its direction: both regions beside a shared edge get the same vertices. A segment
     `straight` tells apart is only cut up."""
