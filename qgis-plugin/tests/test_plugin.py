@@ -316,7 +316,13 @@ def test_named_progress_stages_reach_the_log(qgis_app):
                      progress=lambda fraction, message: stages.append(message))
     log = Log()
     run("gridmap", INPUT=layer, ID_FIELD="code", OUTPUT="memory:", feedback=log)
-    assert set(stages) <= set(log.texts)
+    # The outline's stages run side by side, and its messages name those still running when
+    # one ends, which depends on the threads: each message is compared by the stage it names.
+    def named(messages):
+        return {m.split(":")[0] for m in messages}
+
+    assert "outline" in named(stages)
+    assert named(stages) <= named(log.texts)
 
 
 def test_selected_features_only(qgis_app):
