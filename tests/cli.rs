@@ -504,9 +504,9 @@ fn a_table_without_geometry_is_refused_as_such() {
     assert_eq!(scratch.listing(), ["table.gpkg"]);
 }
 
-/// Writes a GeoPackage layer `name` (field `code`, null when "") with the given WKT geometries
-/// (None: null).
-fn write_layer(path: &Path, name: &str, rows: &[(&str, Option<&str>)]) {
+/// Writes a GeoPackage layer `name` in EPSG:`epsg` (field `code`, null when "") with the given
+/// WKT geometries (None: null).
+fn write_layer(path: &Path, name: &str, epsg: u32, rows: &[(&str, Option<&str>)]) {
     let driver = DriverManager::get_driver_by_name("GPKG").unwrap();
     let mut dataset = if path.exists() {
         Dataset::open_ex(
@@ -521,7 +521,8 @@ fn write_layer(path: &Path, name: &str, rows: &[(&str, Option<&str>)]) {
     } else {
         driver.create_vector_only(path).unwrap()
     };
-    let srs = SpatialRef::from_epsg(5070).unwrap();
+    let mut srs = SpatialRef::from_epsg(epsg).unwrap();
+    srs.set_axis_mapping_strategy(gdal::spatial_ref::AxisMappingStrategy::TraditionalGisOrder);
     let layer = dataset
         .create_layer(LayerOptions {
             name,
@@ -551,18 +552,30 @@ fn unusable_features_are_refused_by_name() {
     let scratch = Scratch::new("bad-features");
     let src = scratch.path("bad.gpkg");
     let square = "POLYGON ((0 0, 1 0, 1 1, 0 1, 0 0))";
-    write_layer(&src, "null_geometry", &[("A", Some(square)), ("B", None)]);
+    write_layer(
+        &src,
+        "null_geometry",
+        5070,
+        &[("A", Some(square)), ("B", None)],
+    );
     write_layer(
         &src,
         "point",
+        5070,
         &[("A", Some(square)), ("C", Some("POINT (1 2)"))],
     );
     write_layer(
         &src,
         "duplicate",
+        5070,
         &[("A", Some(square)), ("A", Some(square))],
     );
-    write_layer(&src, "null_id", &[("A", Some(square)), ("", Some(square))]);
+    write_layer(
+        &src,
+        "null_id",
+        5070,
+        &[("A", Some(square)), ("", Some(square))],
+    );
     let cases = [
         ("null_geometry", "feature B: the geometry is null"),
         ("point", "feature C: the geometry is a POINT"),
@@ -1207,6 +1220,48 @@ fn a_world_layer_in_longitude_and_latitude_is_laid_out_in_equal_earth() {
     let srs = written.layer(0).unwrap().spatial_ref().unwrap();
     assert_eq!(srs.name().unwrap(), "WGS 84 / Equal Earth Greenwich");
     assert!(srs.to_proj4().unwrap().contains("+proj=eqearth"));
+}
+
+#[test]
+fn regions_drawn_across_the_antimeridian_are_one_country_not_the_world() {
+    // Nine equal regions of 10° by 5° from 165°E to 165°W, the middle column across ±180°
+    // drawn as d3's world-atlas and many TopoJSON files draw Chukotka: its rings step from
+    // 180 to -180. Each such ring's box spans the globe, which used to make the layer a world
+    // map in Equal Earth at 0°, where the middle column became bands round the globe.
+    let scratch = Scratch::new("antimeridian");
+    let src = scratch.path("chukotka.gpkg");
+    let wrap = |x: f64| (x + 180.0).rem_euclid(360.0) - 180.0;
+    let mut rows = Vec::new();
+    for column in 0..3 {
+        for row in 0..3 {
+            let (west, south) = (165.0 + 10.0 * column as f64, 55.0 + 5.0 * row as f64);
+            let corners = [(0.0, 0.0), (5.0, 0.0), (10.0, 0.0), (10.0, 5.0), (5.0, 5.0)];
+            let ring: Vec<String> = (corners.iter().chain(&[(0.0, 5.0), (0.0, 0.0)]))
+                .map(|(dx, dy)| format!("{} {}", wrap(west + dx), south + dy))
+                .collect();
+            rows.push((
+                format!("c{column}r{row}"),
+                format!("POLYGON(({}))", ring.join(",")),
+            ));
+        }
+    }
+    let rows: Vec<(&str, Option<&str>)> = (rows.iter())
+        .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))
+        .collect();
+    write_layer(&src, "regions", 4326, &rows);
+    let dst = scratch.path("grid.gpkg");
+    let output = snakegrid(["-id", "code", p(&dst), p(&src)]);
+    assert_success(&output);
+    let summary = stdout(&output);
+    assert!(
+        summary.contains("Lambert azimuthal equal-area centred on the layer (62.5N 180.0E)"),
+        "{summary}"
+    );
+    assert!(!summary.contains("repaired"), "{summary}");
+    // A 3 × 3 block laid out as a 3 × 3 block keeps all 12 rook pairs (a hand count).
+    assert!(summary.contains("C_adjacent 1.000"), "{summary}");
+    let (_, rows) = read_rows(&dst);
+    assert_eq!(assert_grid(&rows, "code").len(), 9);
 }
 
 #[test]

@@ -12,6 +12,8 @@
 //! Alaska together span 40°, not 360°).
 
 use super::Error;
+use geo::{BooleanOps, BoundingRect, Coord, LineString, MapCoords, MultiPolygon, Polygon, Rect};
+use std::borrow::Cow;
 
 /// A region's extent in degrees of longitude (west, east) and latitude (south, north).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,6 +35,9 @@ pub struct WorkingCrs {
     pub name: String,
     /// What the user should be told: which projection, where, and why.
     pub note: String,
+    /// Its central meridian: the globe is split on the meridian opposite, where
+    /// [`cut_at_seam`] cuts the regions before they are projected.
+    pub central_meridian: f64,
 }
 
 /// What the user should know about laying a layer out in its own projected CRS `crs` (a name
@@ -95,13 +100,16 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
         .collect();
     let south = finite.iter().map(|b| b.south).reduce(f64::min);
     let north = finite.iter().map(|b| b.north).reduce(f64::max);
-    let range = longitude_range(finite.iter().map(|b| (b.west, b.east)).collect());
-    let (Some(south), Some(north), Some((west, east))) = (south, north, range) else {
+    let west = finite.iter().map(|b| b.west).reduce(f64::min);
+    let east = finite.iter().map(|b| b.east).reduce(f64::max);
+    let (Some(south), Some(north), Some(west), Some(east)) = (south, north, west, east) else {
         return Err(Error::input(
             None,
             "the layer has no coordinates to centre a projection on",
         ));
     };
+    // Longitudes from 0 to 360 (a Pacific-centred layer) and a ring's longitudes carried
+    // across ±180° (`lon_lat_boxes`) are longitudes still.
     if south < -90.0 || north > 90.0 || west < -540.0 || east > 540.0 {
         return Err(Error::input(
             None,
@@ -111,6 +119,7 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
             ),
         ));
     }
+    let (west, east) = longitude_range(finite.iter().map(|b| (b.west, b.east)).collect());
     let lon = wrap((west + east) / 2.0);
     if east - west > WORLD_SPAN {
         let name = if lon.abs() < 1e-9 {
@@ -127,6 +136,7 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
                 longitude_text(lon)
             ),
             name,
+            central_meridian: lon,
         });
     }
     let lat = (south + north) / 2.0;
@@ -141,6 +151,7 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
         ),
         note: format!("projected to Lambert azimuthal equal-area centred on the layer ({centre})"),
         name,
+        central_meridian: lon,
     })
 }
 
@@ -197,26 +208,172 @@ fn latitude_text(lat: f64) -> String {
 
 /// The stretch of longitudes the regions' spans cover: the circle minus the widest gap between
 /// them, so that a layer across ±180° is centred on the layer and not on the far side of the
-/// Earth. Spans outside -180..180 (a wrong CRS, which the caller refuses) are taken as they are.
-fn longitude_range(mut spans: Vec<(f64, f64)>) -> Option<(f64, f64)> {
-    let west = spans.iter().map(|s| s.0).reduce(f64::min)?;
-    let east = spans.iter().map(|s| s.1).reduce(f64::max)?;
-    if west < -180.0 || east > 180.0 {
-        return Some((west, east));
+/// Earth. A span is taken on the circle: from 170 to 190 crosses ±180°, as does one from 350
+/// to 370, and one of 360° or more covers it all.
+fn longitude_range(spans: Vec<(f64, f64)>) -> (f64, f64) {
+    let mut arcs = Vec::with_capacity(spans.len());
+    for (west, east) in spans {
+        if east - west >= 360.0 {
+            return (-180.0, 180.0);
+        }
+        let start = (west + 180.0).rem_euclid(360.0) - 180.0;
+        let end = start + (east - west).max(0.0);
+        if end > 180.0 {
+            arcs.push((start, 180.0));
+            arcs.push((-180.0, end - 360.0));
+        } else {
+            arcs.push((start, end));
+        }
     }
-    spans.sort_by(|a, b| a.0.total_cmp(&b.0));
-    // The gap across ±180° gives the plain range; a wider one between two regions moves the
-    // layer's west end to the region after it.
+    arcs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let west = arcs[0].0;
+    let east = arcs.iter().map(|a| a.1).fold(f64::NEG_INFINITY, f64::max);
+    // The gap across ±180° gives the plain range; a wider one between two arcs moves the
+    // layer's west end to the arc after it.
     let (mut widest, mut range) = (west + 360.0 - east, (west, east));
-    let mut reach = spans[0].1;
-    for &(start, end) in &spans[1..] {
+    let mut reach = arcs[0].1;
+    for &(start, end) in &arcs[1..] {
         if start - reach > widest {
             widest = start - reach;
             range = (start, reach + 360.0);
         }
         reach = reach.max(end);
     }
-    Some(range)
+    range
+}
+
+/// Whether a ring steps more than half way round the globe between two vertices: it crosses
+/// ±180° drawn the short way (Chukotka in d3's world-atlas and in many TopoJSON files), or it
+/// goes round a pole.
+fn jumps(ring: &LineString<f64>) -> bool {
+    ring.0.windows(2).any(|w| (w[1].x - w[0].x).abs() > 180.0)
+}
+
+/// `ring` with its longitudes made continuous: each step of more than 180° is taken the short
+/// way, across ±180°. `None` when the ring does not close that way, since it goes round a pole
+/// (Antarctica, closed along the pole's parallel): drawn from -180 to 180, it is right as it is.
+fn unwrapped(ring: &LineString<f64>) -> Option<LineString<f64>> {
+    let mut shift = 0.0;
+    let mut previous = ring.0.first()?.x;
+    let coords = ring.0.iter().map(|c| {
+        if c.x - previous > 180.0 {
+            shift -= 360.0;
+        } else if c.x - previous < -180.0 {
+            shift += 360.0;
+        }
+        previous = c.x;
+        Coord {
+            x: c.x + shift,
+            y: c.y,
+        }
+    });
+    let coords: Vec<Coord<f64>> = coords.collect();
+    (shift == 0.0).then_some(LineString(coords))
+}
+
+/// A ring as the globe has it: unwrapped where it crosses ±180°, else as drawn.
+fn continuous(ring: &LineString<f64>) -> Cow<'_, LineString<f64>> {
+    if jumps(ring) {
+        unwrapped(ring).map_or(Cow::Borrowed(ring), Cow::Owned)
+    } else {
+        Cow::Borrowed(ring)
+    }
+}
+
+/// The extent of each part of a region in longitude and latitude, for [`working_crs`]: a
+/// region across ±180° is either drawn as parts on both sides, or as rings that step across
+/// it; a box of the whole region, or of a stepping ring as drawn, would span the globe and make
+/// a country a world map. A part's holes lie within its shell.
+pub fn lon_lat_boxes(region: &MultiPolygon<f64>) -> Vec<LonLatBox> {
+    region
+        .0
+        .iter()
+        .filter_map(|part| continuous(part.exterior()).bounding_rect())
+        .map(|b| LonLatBox {
+            west: b.min().x,
+            south: b.min().y,
+            east: b.max().x,
+            north: b.max().y,
+        })
+        .collect()
+}
+
+/// `region` (longitude and latitude) ready for a projection centred on `central`, which
+/// splits the globe on the meridian opposite (the seam): each ring made continuous across
+/// ±180°, each part moved by whole turns to within `central` ± 180°, and a part that crosses
+/// the seam cut there, its pieces on either edge of the map. `None` when every ring is
+/// continuous and within `central` ± 180° already (nearly every region: one pass over the
+/// coordinates). A projection would otherwise draw a part that steps across ±180° as a band
+/// round the globe.
+pub fn cut_at_seam(region: &MultiPolygon<f64>, central: f64) -> Option<MultiPolygon<f64>> {
+    let (west_edge, east_edge) = (central - 180.0, central + 180.0);
+    let inside = |ring: &LineString<f64>| {
+        matches!(continuous(ring), Cow::Borrowed(_))
+            && ring
+                .0
+                .iter()
+                .all(|c| (west_edge..=east_edge).contains(&c.x))
+    };
+    if region
+        .0
+        .iter()
+        .all(|part| inside(part.exterior()) && part.interiors().iter().all(&inside))
+    {
+        return None;
+    }
+    let mut pieces = Vec::new();
+    for part in &region.0 {
+        let exterior = continuous(part.exterior()).into_owned();
+        let Some(extent) = exterior.bounding_rect() else {
+            continue;
+        };
+        let middle = (extent.min().x + extent.max().x) / 2.0;
+        // A hole unwrapped on its own may lie a whole turn from its shell.
+        let holes = part.interiors().iter().map(|hole| {
+            let hole = continuous(hole).into_owned();
+            let centre = hole.bounding_rect().map_or(middle, |b| b.center().x);
+            let turns = ((middle - centre) / 360.0).round();
+            shifted(hole, 360.0 * turns)
+        });
+        let part = Polygon::new(exterior, holes.collect());
+        // The turns of the globe the part spans, one meridian on the seam counting to the west.
+        let first = ((extent.min().x - west_edge) / 360.0).floor() as i64;
+        let last = (((extent.max().x - west_edge) / 360.0).ceil() as i64 - 1).max(first);
+        if first == last {
+            let turns = -360.0 * first as f64;
+            pieces.push(part.map_coords(|c| Coord {
+                x: c.x + turns,
+                ..c
+            }));
+            continue;
+        }
+        for turn in first..=last {
+            let offset = 360.0 * turn as f64;
+            let band = Rect::new(
+                Coord {
+                    x: west_edge + offset,
+                    y: extent.min().y - 1.0,
+                },
+                Coord {
+                    x: east_edge + offset,
+                    y: extent.max().y + 1.0,
+                },
+            )
+            .to_polygon();
+            let clipped = part.intersection(&band);
+            pieces.extend(clipped.0.into_iter().map(|p| {
+                p.map_coords(|c| Coord {
+                    x: c.x - offset,
+                    ..c
+                })
+            }));
+        }
+    }
+    Some(MultiPolygon(pieces))
+}
+
+fn shifted(ring: LineString<f64>, dx: f64) -> LineString<f64> {
+    ring.map_coords(|c| Coord { x: c.x + dx, ..c })
 }
 
 #[cfg(test)]
@@ -243,19 +400,130 @@ mod tests {
             (-180.0, -178.0),
             (-179.0, -178.5),
         ];
-        assert_eq!(longitude_range(fiji), Some((177.0, 182.0)));
+        assert_eq!(longitude_range(fiji), (177.0, 182.0));
     }
 
     #[test]
     fn other_layers_keep_their_plain_range() {
         assert_eq!(
             longitude_range(vec![(5.0, 10.0), (-3.0, 4.0)]),
-            Some((-3.0, 10.0))
+            (-3.0, 10.0)
         );
         // A region that spans the world leaves no gap to move the ends to.
         let world = vec![(-180.0, 180.0), (170.0, 175.0)];
-        assert_eq!(longitude_range(world), Some((-180.0, 180.0)));
-        assert_eq!(longitude_range(Vec::new()), None);
+        assert_eq!(longitude_range(world), (-180.0, 180.0));
+    }
+
+    #[test]
+    fn spans_are_taken_on_the_circle() {
+        // A ring carried across ±180° (lon_lat_boxes), and a layer drawn from 0 to 360.
+        assert_eq!(
+            longitude_range(vec![(170.0, 190.0), (150.0, 160.0)]),
+            (150.0, 190.0)
+        );
+        assert_eq!(
+            longitude_range(vec![(350.0, 355.0), (5.0, 10.0)]),
+            (-10.0, 10.0)
+        );
+    }
+
+    /// A square ring from `west` to `east` (degrees), drawn as a lon/lat file draws it: its
+    /// longitudes wrapped into -180..180, so a ring across ±180° steps from 180 to -180.
+    fn wrapped_square(west: f64, east: f64, south: f64, north: f64) -> Polygon<f64> {
+        let steps = 8;
+        let mut coords = Vec::new();
+        for k in 0..=steps {
+            coords.push((west + (east - west) * k as f64 / steps as f64, south));
+        }
+        for k in 0..=steps {
+            coords.push((east - (east - west) * k as f64 / steps as f64, north));
+        }
+        coords.push((west, south));
+        let wrap = |x: f64| (x + 180.0).rem_euclid(360.0) - 180.0;
+        Polygon::new(
+            coords
+                .into_iter()
+                .map(|(x, y)| Coord { x: wrap(x), y })
+                .collect(),
+            vec![],
+        )
+    }
+
+    fn area(p: &MultiPolygon<f64>) -> f64 {
+        use geo::Area;
+        p.unsigned_area()
+    }
+
+    #[test]
+    fn a_region_stepping_across_the_antimeridian_is_one_country_not_the_world() {
+        // Russia as d3's world-atlas draws it: Kaliningrad, and a mainland whose rings step
+        // from 180 to -180 (Chukotka); its box as drawn is the whole globe.
+        let russia = MultiPolygon(vec![
+            wrapped_square(19.6, 22.9, 54.3, 55.3),
+            wrapped_square(27.0, 190.0, 41.2, 77.7),
+        ]);
+        let boxes = lon_lat_boxes(&russia);
+        assert_eq!((boxes[1].west, boxes[1].east), (27.0, 190.0));
+        let crs = working_crs(&boxes).unwrap();
+        assert!(crs.name.starts_with("Lambert azimuthal"), "{}", crs.name);
+        assert!((crs.central_meridian - 104.8).abs() < 1e-9);
+        // Centred there, the mainland is carried across ±180° whole, not cut.
+        let ready = cut_at_seam(&russia, crs.central_meridian).unwrap();
+        assert_eq!(ready.0.len(), 2);
+        let mainland = ready.0[1].bounding_rect().unwrap();
+        assert_eq!((mainland.min().x, mainland.max().x), (27.0, 190.0));
+        assert!((area(&ready) - (3.3 * 1.0 + 163.0 * 36.5)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn on_a_world_map_a_region_across_the_seam_is_cut_there() {
+        let chukotka = MultiPolygon(vec![wrapped_square(170.0, 190.0, 62.0, 70.0)]);
+        let cut = cut_at_seam(&chukotka, 0.0).unwrap();
+        let mut spans: Vec<(f64, f64)> = (cut.0.iter())
+            .map(|p| p.bounding_rect().unwrap())
+            .map(|b| (b.min().x, b.max().x))
+            .collect();
+        spans.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(spans.len(), 2);
+        assert!((spans[0].0 + 180.0).abs() < 1e-7 && (spans[0].1 + 170.0).abs() < 1e-7);
+        assert!((spans[1].0 - 170.0).abs() < 1e-7 && (spans[1].1 - 180.0).abs() < 1e-7);
+        assert!((area(&cut) - 20.0 * 8.0).abs() < 1e-6);
+        // A region within the map, as drawn, is left alone.
+        let france = MultiPolygon(vec![wrapped_square(-5.0, 8.0, 42.0, 51.0)]);
+        assert_eq!(cut_at_seam(&france, 0.0), None);
+        assert_eq!(cut_at_seam(&chukotka, 175.0).map(|c| area(&c)), Some(160.0));
+    }
+
+    #[test]
+    fn a_ring_round_the_pole_is_kept_and_cut_where_the_map_is_split() {
+        // Antarctica: its coast from -180 to 180, closed along the pole's parallel.
+        let antarctica = MultiPolygon(vec![Polygon::new(
+            LineString::from(vec![
+                (-180.0, -70.0),
+                (0.0, -65.0),
+                (180.0, -70.0),
+                (180.0, -90.0),
+                (-180.0, -90.0),
+                (-180.0, -70.0),
+            ]),
+            vec![],
+        )]);
+        assert_eq!(lon_lat_boxes(&antarctica)[0].east, 180.0);
+        assert_eq!(cut_at_seam(&antarctica, 0.0), None);
+        let pacific = cut_at_seam(&antarctica, -160.0).unwrap();
+        assert_eq!(pacific.0.len(), 2);
+        // The overlay rounds a new vertex to about 1e-9 of the extent (2e-7°, 2 cm here).
+        assert!(
+            (area(&pacific) - area(&antarctica)).abs() < 1e-4,
+            "{pacific:?}"
+        );
+        for part in &pacific.0 {
+            let b = part.bounding_rect().unwrap();
+            assert!(
+                b.min().x >= -340.0 - 1e-9 && b.max().x <= 20.0 + 1e-9,
+                "{b:?}"
+            );
+        }
     }
 
     #[test]

@@ -15,6 +15,10 @@ pub(crate) struct Plan {
     pub transform: Option<CoordTransform>,
     /// What the user should know about it.
     pub note: Option<String>,
+    /// The central meridian of the working CRS the rule chose for a layer in longitude and
+    /// latitude: regions are cut on the meridian opposite before they are projected
+    /// ([`crate::crs::cut_at_seam`]).
+    pub seam: Option<f64>,
 }
 
 /// Decides the working CRS: `-t_srs`, else the source's when it is projected, else the rule of
@@ -50,6 +54,7 @@ pub(crate) fn plan(
                 working: None,
                 transform: None,
                 note: Some(note),
+                seam: None,
             })
         }
         (None, Some(target)) => Err(Error::InvalidInput {
@@ -70,6 +75,7 @@ pub(crate) fn plan(
                 transform: Some(transform(session, source, &working)?),
                 working: Some(working),
                 note: Some(note),
+                seam: None,
             })
         }
         (Some(source), None) if source.is_geographic() => {
@@ -89,6 +95,7 @@ pub(crate) fn plan(
                     chosen.note
                 )),
                 working: Some(working),
+                seam: Some(chosen.central_meridian),
             })
         }
         (Some(source), None) => {
@@ -98,6 +105,7 @@ pub(crate) fn plan(
                 working: Some(source.clone()),
                 transform: None,
                 note: method.and_then(|m| crate::crs::projected_note(&m, &describe(source))),
+                seam: None,
             })
         }
     }

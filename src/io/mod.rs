@@ -509,13 +509,17 @@ impl<'l> Source<'l> {
             pin,
         };
         let checked = read::check(&features, &setting_fields)?;
+        // Read as drawn only when the working-CRS rule needs the extents.
+        let drawn = std::cell::OnceCell::new();
+        let drawn_once = || drawn.get_or_init(|| read::drawn(&checked));
         let plan = crs::plan(
             session,
             source_srs.as_ref(),
             job.target_srs.as_deref(),
-            || read::boxes(&checked),
+            || read::boxes(drawn_once()),
         )?;
-        let regions = read::regions(session, &checked, plan.transform.as_ref())?;
+        let seam = plan.seam.map(|central| (central, drawn_once().as_slice()));
+        let regions = read::regions(session, &checked, plan.transform.as_ref(), seam)?;
         let labels = checked.into_iter().map(|c| c.label).collect();
         notes.extend(plan.note.clone());
         Ok(Source {

@@ -276,19 +276,24 @@ fn flat_copy(geometry: &Geometry) -> Geometry {
     copy
 }
 
-/// The lon/lat extent of every checked geometry of a geographic layer, for the working CRS.
-pub(crate) fn boxes(checked: &[Checked]) -> Vec<LonLatBox> {
-    checked
+/// Every checked geometry as drawn, for the working-CRS rule on a layer in longitude and
+/// latitude; `None` where the bytes cannot be read as polygons (refused in [`regions`]).
+pub(crate) fn drawn(checked: &[Checked]) -> Vec<Option<MultiPolygon<f64>>> {
+    use rayon::prelude::*;
+    let bytes: Vec<Option<Vec<u8>>> = checked.iter().map(|c| c.geometry.wkb().ok()).collect();
+    bytes
+        .into_par_iter()
+        .map(|b| b.and_then(|b| crate::wkb::to_multi_polygon(&b).ok()))
+        .collect()
+}
+
+/// The lon/lat extents of the parts of the geometries `drawn`, for the working CRS
+/// ([`crate::crs::lon_lat_boxes`]).
+pub(crate) fn boxes(drawn: &[Option<MultiPolygon<f64>>]) -> Vec<LonLatBox> {
+    drawn
         .iter()
-        .map(|c| {
-            let e = c.geometry.envelope();
-            LonLatBox {
-                west: e.MinX,
-                south: e.MinY,
-                east: e.MaxX,
-                north: e.MaxY,
-            }
-        })
+        .flatten()
+        .flat_map(crate::crs::lon_lat_boxes)
         .collect()
 }
 
@@ -296,25 +301,45 @@ pub(crate) fn boxes(checked: &[Checked]) -> Vec<LonLatBox> {
 /// WKB in one call and the bytes are parsed on every core: the binding's own conversion asks
 /// GDAL for one vertex at a time, on one core, a tenth of a second at 10⁶ vertices
 /// (BENCHMARKS.md "Dense boundaries").
+/// With `seam` (the working CRS's central meridian and the geometries as drawn, when the
+/// working-CRS rule chose it), a region across the meridian opposite, or drawn stepping across
+/// ±180°, is cut there first ([`crate::crs::cut_at_seam`]).
 pub(crate) fn regions(
     session: &Session,
     checked: &[Checked],
     transform: Option<&CoordTransform>,
+    seam: Option<(f64, &[Option<MultiPolygon<f64>>])>,
 ) -> Result<Vec<Region>, Error> {
     use rayon::prelude::*;
     let cannot_read = |id: &str| Error::input(Some(id), "the geometry cannot be read as polygons");
+    let cuts: Vec<Option<MultiPolygon<f64>>> = match seam {
+        Some((central, drawn)) => drawn
+            .par_iter()
+            .map(|g| g.as_ref().and_then(|g| crate::crs::cut_at_seam(g, central)))
+            .collect(),
+        None => Vec::new(),
+    };
     let read = checked
         .iter()
-        .map(|c| {
+        .enumerate()
+        .map(|(k, c)| {
+            let cut = match cuts.get(k) {
+                Some(Some(cut)) => Some(
+                    Geometry::from_wkb(&crate::wkb::from_multi_polygon(cut))
+                        .map_err(|_| cannot_read(&c.id))?,
+                ),
+                _ => None,
+            };
             let projected;
             let geometry = match transform {
                 Some(t) => {
-                    projected = c.geometry.transform(t).map_err(|e| {
-                        match session.io_error("cannot project the geometry", e) {
-                            Error::Io(message) => Error::input(Some(&c.id), message),
-                            other => other,
-                        }
-                    })?;
+                    projected =
+                        cut.as_ref().unwrap_or(&c.geometry).transform(t).map_err(
+                            |e| match session.io_error("cannot project the geometry", e) {
+                                Error::Io(message) => Error::input(Some(&c.id), message),
+                                other => other,
+                            },
+                        )?;
                     &projected
                 }
                 None => &c.geometry,
