@@ -1064,9 +1064,10 @@ snakegrid_status snakegrid_edit_pins(const struct snakegrid_regions *cells,
 
 /**
  * Chooses the working CRS for a layer in longitude and latitude (degrees) from its regions'
- * extents: `boxes` holds `count` boxes of four numbers each, west, south, east, north (the
- * extent of each region, or one box for the whole layer; a layer across the antimeridian is
- * read right when each region has its own box). Writes a new handle to `*out`.
+ * extents: `boxes` holds `count` boxes of four numbers each, west, south, east, north (best
+ * the boxes snakegrid_lon_lat_boxes() gives for each region; the extent of each region, or
+ * one box for the whole layer, also do, but a region drawn across the antimeridian then spans
+ * the globe). Writes a new handle to `*out`.
  *
  * A layer spanning more than 180° of longitude gets Equal Earth, any other Lambert azimuthal
  * equal-area centred on it; a layer whose CRS is already projected needs no call (lay it out
@@ -1111,6 +1112,44 @@ SNAKEGRID_MUST_USE
 snakegrid_status snakegrid_looks_like_degrees(const double *boxes,
                                               size_t count,
                                               bool *out);
+
+/**
+ * The boxes of one region in longitude and latitude (WKB Polygon or MultiPolygon, `wkb_len`
+ * bytes) for snakegrid_working_crs(): one box per polygon, four numbers each (west, south,
+ * east, north), with a ring that steps across ±180° (as d3's world-atlas draws Russia and
+ * Fiji) taken across it, so its box may run past 180. Writes the numbers to `*boxes` and the
+ * number of boxes to `*count`; the numbers stay valid until the next call of this function
+ * on the same thread.
+ *
+ * Fails with SNAKEGRID_INVALID_INPUT when the bytes are not a Polygon or MultiPolygon.
+ *
+ * Thread safety: safe from any thread.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_lon_lat_boxes(const uint8_t *wkb,
+                                         size_t wkb_len,
+                                         const double **boxes,
+                                         size_t *count);
+
+/**
+ * One region in longitude and latitude (WKB, as snakegrid_lon_lat_boxes()) made ready to be
+ * projected to the working CRS `crs`, which splits the globe on the meridian opposite its
+ * centre: rings that step across ±180° are carried across, and a region across that meridian
+ * is cut there, its pieces on either edge of the map. Projected as drawn, such a region would
+ * become a band round the globe. Writes a little-endian WKB MultiPolygon to `*out` and its
+ * length to `*out_len`, valid until the next call of this function on the same thread; or
+ * NULL and 0 when the region needs no change (nearly every region), so project it as it is.
+ *
+ * Fails with SNAKEGRID_INVALID_INPUT when the bytes are not a Polygon or MultiPolygon.
+ *
+ * Thread safety: any number of threads may read one handle at once.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_crs_cut(const struct snakegrid_crs *crs,
+                                   const uint8_t *wkb,
+                                   size_t wkb_len,
+                                   const uint8_t **out,
+                                   size_t *out_len);
 
 /**
  * Frees a CRS handle. NULL is ignored.

@@ -213,6 +213,21 @@ def main():
     geojson("antimeridian.geojson", antimeridian, crs="urn:ogc:def:crs:OGC:1.3:CRS84")
     case("antimeridian.geojson", "ok", "-")
 
+    # The same across ±180° as d3's world-atlas draws Russia and Fiji: the middle column's
+    # rings step from 178.5 to -178.5, so each of those regions' own box spans the world.
+    def wrapped(lon):
+        return lon - 360.0 if lon > 180.0 else lon
+
+    stepping = []
+    for j in range(2):
+        for i in range(3):
+            west, south = 175.5 + 3.0 * i, -20.0 + 3.0 * j
+            ring = [[wrapped(west + dx), south + dy]
+                    for dx, dy in ((0, 0), (3, 0), (3, 3), (0, 3), (0, 0))]
+            stepping.append(feature(f"s{j}{i}", "Polygon", [ring]))
+    geojson("antimeridian_stepping.geojson", stepping, crs="urn:ogc:def:crs:OGC:1.3:CRS84")
+    case("antimeridian_stepping.geojson", "ok", "-")
+
     nan = square(502000, 5000000, 1000)
     nan[0][2] = [math.nan, 5001000]
     geojson("nan_coordinate.geojson", block(2, 1) + [feature("nan", "Polygon", nan)])

@@ -183,6 +183,14 @@ SIGNATURES = {
     "snakegrid_crs_wkt": (_STATUS, [_P, _OUT_TEXT]),
     "snakegrid_crs_name": (_STATUS, [_P, _OUT_TEXT]),
     "snakegrid_crs_note": (_STATUS, [_P, _OUT_TEXT]),
+    "snakegrid_lon_lat_boxes": (
+        _STATUS,
+        [ctypes.POINTER(ctypes.c_uint8), _SIZE,
+         ctypes.POINTER(ctypes.POINTER(ctypes.c_double)), _OUT_SIZE],
+    ),
+    "snakegrid_crs_cut": (
+        _STATUS, [_P, ctypes.POINTER(ctypes.c_uint8), _SIZE, _OUT_BYTES, _OUT_SIZE],
+    ),
     "snakegrid_projected_crs_note": (_STATUS, [_TEXT, _TEXT, _OUT_TEXT]),
     "snakegrid_looks_like_degrees": (
         _STATUS,

@@ -28,15 +28,11 @@ def from_wkb(wkb, as_shapely):
     return shapely.wkb.loads(wkb)
 
 
-def bounds(geometry):
-    """(west, south, east, north) of a shapely geometry, or the four numbers given."""
-    if hasattr(geometry, "bounds"):
-        return tuple(geometry.bounds)
-    if is_wkb(geometry):
-        raise TypeError(
-            "working_crs takes shapely geometries or (west, south, east, north) boxes; for WKB, "
-            "install shapely and pass shapely.from_wkb(...)")
-    box = tuple(float(v) for v in geometry)
+def box(region):
+    """A (west, south, east, north) box given as four numbers, or None for a geometry."""
+    if region is None or is_wkb(region) or hasattr(region, "wkb"):
+        return None
+    box = tuple(float(v) for v in region)
     if len(box) != 4:
         raise TypeError(f"a box is four numbers (west, south, east, north), got {len(box)}")
     return box

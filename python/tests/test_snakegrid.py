@@ -236,6 +236,24 @@ def test_working_crs_is_the_command_lines(tmp_path):
     assert snakegrid.working_crs([frame.total_bounds]).name != crs.name
 
 
+def test_a_region_drawn_across_the_antimeridian_is_read_and_cut_right():
+    # Chukotka as d3's world-atlas draws it: a ring stepping from 180 to -180. Its bounds span
+    # the globe; the library reads it as the 20° it is, and cuts it for a world map.
+    from shapely.geometry import Polygon
+
+    chukotka = Polygon([(170, 60), (-170, 60), (-170, 70), (170, 70), (170, 60)])
+    alone = snakegrid.working_crs([chukotka])
+    assert alone.name == "Lambert azimuthal equal-area at 65.0N 180.0E (snakegrid)"
+    assert alone.cut(chukotka).bounds == (170, 60, 190, 70)
+    world = snakegrid.working_crs([(-180, -60, 180, 80)])
+    pieces = world.cut(chukotka)
+    assert sorted(p.bounds for p in pieces.geoms) == [(-180, 60, -170, 70), (170, 60, 180, 70)]
+    assert abs(pieces.area - 200) < 1e-9
+    assert isinstance(world.cut(chukotka.wkb), bytes)
+    france = Polygon([(0, 45), (5, 45), (5, 50), (0, 50)])
+    assert world.cut(france) is france
+
+
 def test_working_crs_refuses_what_cannot_be_degrees():
     with pytest.raises(snakegrid.SnakegridError, match="not longitudes and latitudes"):
         snakegrid.working_crs([(1e5, 1e5, 2e5, 2e5)])

@@ -40,6 +40,7 @@ from conftest import BAD, CLI, DATA, PYTHON, WHEEL, install_wheel
 US_STATES = os.path.join(DATA, "us_states.gpkg")
 US_COUNTIES = os.path.join(DATA, "us_counties.gpkg")
 ANTIMERIDIAN = os.path.join(BAD, "antimeridian.geojson")
+ANTIMERIDIAN_STEPPING = os.path.join(BAD, "antimeridian_stepping.geojson")
 METRICS = ["C_LOCATION", "C_ADJACENT", "C_ORIENTATION", "C_SHAPE"]
 
 
@@ -627,14 +628,20 @@ def test_qgis_process_runs_the_algorithm(plugin, request, cli_layout, tmp_path):
     assert QgsVectorLayer(outline, "outline", "ogr").featureCount() == 1
 
 
+# Squares across ±180°, split there, and drawn with rings that step across it (as d3's
+# world-atlas draws Russia): both are one small layer, laid out in the same CRS as the CLI's.
+@pytest.mark.parametrize("source", [ANTIMERIDIAN, ANTIMERIDIAN_STEPPING])
 def test_qgis_process_lays_out_the_antimeridian_layer_as_the_command_line(
-        offline_plugin, tmp_path):
+        offline_plugin, tmp_path, source):
     out = str(tmp_path / "grid.gpkg")
     done = qgis_process(offline_plugin, "run", "snakegrid:gridmap", "--",
-                        f"INPUT={ANTIMERIDIAN}", "ID_FIELD=code", f"OUTPUT={out}")
+                        f"INPUT={source}", "ID_FIELD=code", f"OUTPUT={out}")
     assert done.returncode == 0, done.stdout + done.stderr
-    expected = cli(str(tmp_path / "cli.gpkg"), ANTIMERIDIAN, id_field="code")
+    assert "Lambert azimuthal equal-area centred on the layer" in done.stdout
+    expected = cli(str(tmp_path / "cli.gpkg"), source, id_field="code")
     assert layout(out, "code") == layout(expected, "code")
+    grid = QgsVectorLayer(out, "grid", "ogr")
+    assert grid.crs().description() == QgsVectorLayer(expected, "cli", "ogr").crs().description()
 
 
 def test_qgis_process_help_is_plain_text(offline_plugin):

@@ -361,9 +361,11 @@ pub fn cut_at_seam(region: &MultiPolygon<f64>, central: f64) -> Option<MultiPoly
             )
             .to_polygon();
             let clipped = part.intersection(&band);
+            // The overlay rounds a vertex on the seam to within about 1e-9 of the extent, and
+            // one rounded past the seam would be projected to the far edge of the map.
             pieces.extend(clipped.0.into_iter().map(|p| {
                 p.map_coords(|c| Coord {
-                    x: c.x - offset,
+                    x: (c.x - offset).clamp(west_edge, east_edge),
                     ..c
                 })
             }));
@@ -488,6 +490,12 @@ mod tests {
         assert!((spans[0].0 + 180.0).abs() < 1e-7 && (spans[0].1 + 170.0).abs() < 1e-7);
         assert!((spans[1].0 - 170.0).abs() < 1e-7 && (spans[1].1 - 180.0).abs() < 1e-7);
         assert!((area(&cut) - 20.0 * 8.0).abs() < 1e-6);
+        // Not a hair past ±180°, which the projection would carry to the far edge.
+        assert!(cut
+            .0
+            .iter()
+            .flat_map(|p| p.exterior().0.iter())
+            .all(|c| c.x.abs() <= 180.0));
         // A region within the map, as drawn, is left alone.
         let france = MultiPolygon(vec![wrapped_square(-5.0, 8.0, 42.0, 51.0)]);
         assert_eq!(cut_at_seam(&france, 0.0), None);

@@ -4,7 +4,7 @@
 
 use super::handle::{self, Handle, Out};
 use super::status::{c_string, guard, guard_free, Failure, Status};
-use crate::crs::{looks_like_degrees, projected_note, working_crs, LonLatBox};
+use crate::crs::{cut_at_seam, looks_like_degrees, projected_note, working_crs, LonLatBox};
 use std::cell::RefCell;
 use std::ffi::{c_char, CString};
 
@@ -19,6 +19,7 @@ pub(crate) struct ChosenCrs {
     wkt: CString,
     name: CString,
     note: CString,
+    central_meridian: f64,
 }
 
 impl Handle for Crs {
@@ -28,9 +29,10 @@ impl Handle for Crs {
 }
 
 /// Chooses the working CRS for a layer in longitude and latitude (degrees) from its regions'
-/// extents: `boxes` holds `count` boxes of four numbers each, west, south, east, north (the
-/// extent of each region, or one box for the whole layer; a layer across the antimeridian is
-/// read right when each region has its own box). Writes a new handle to `*out`.
+/// extents: `boxes` holds `count` boxes of four numbers each, west, south, east, north (best
+/// the boxes snakegrid_lon_lat_boxes() gives for each region; the extent of each region, or
+/// one box for the whole layer, also do, but a region drawn across the antimeridian then spans
+/// the globe). Writes a new handle to `*out`.
 ///
 /// A layer spanning more than 180° of longitude gets Equal Earth, any other Lambert azimuthal
 /// equal-area centred on it; a layer whose CRS is already projected needs no call (lay it out
@@ -57,6 +59,7 @@ pub unsafe extern "C" fn snakegrid_working_crs(
             wkt: c_string(&chosen.wkt),
             name: c_string(&chosen.name),
             note: c_string(&chosen.note),
+            central_meridian: chosen.central_meridian,
         }));
         Ok(())
     })
@@ -141,6 +144,97 @@ pub unsafe extern "C" fn snakegrid_looks_like_degrees(
         // SAFETY: as the header's contract for `boxes` and `count`.
         let boxes = unsafe { lon_lat_boxes(boxes, count) }?;
         out.write(looks_like_degrees(&boxes));
+        Ok(())
+    })
+}
+
+thread_local! {
+    static BOXES: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
+    static CUT: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The boxes of one region in longitude and latitude (WKB Polygon or MultiPolygon, `wkb_len`
+/// bytes) for snakegrid_working_crs(): one box per polygon, four numbers each (west, south,
+/// east, north), with a ring that steps across ±180° (as d3's world-atlas draws Russia and
+/// Fiji) taken across it, so its box may run past 180. Writes the numbers to `*boxes` and the
+/// number of boxes to `*count`; the numbers stay valid until the next call of this function
+/// on the same thread.
+///
+/// Fails with SNAKEGRID_INVALID_INPUT when the bytes are not a Polygon or MultiPolygon.
+///
+/// Thread safety: safe from any thread.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_lon_lat_boxes(
+    wkb: *const u8,
+    wkb_len: usize,
+    boxes: *mut *const f64,
+    count: *mut usize,
+) -> Status {
+    guard("snakegrid_lon_lat_boxes", || {
+        // SAFETY: `boxes` and `count` are NULL or writable (header contract).
+        let (boxes, count) = unsafe { (Out::new(boxes, "boxes")?, Out::new(count, "count")?) };
+        // SAFETY: NULL or `wkb_len` readable bytes (header contract).
+        let wkb = unsafe { handle::slice(wkb, wkb_len, "wkb") }?;
+        let region = crate::wkb::to_multi_polygon(wkb)
+            .map_err(|message| Failure::from(crate::core::Error::input(None, message)))?;
+        let found = crate::crs::lon_lat_boxes(&region);
+        count.write(found.len());
+        boxes.write(BOXES.with(|slot| {
+            let mut numbers = slot.borrow_mut();
+            numbers.clear();
+            numbers.extend(
+                found
+                    .iter()
+                    .flat_map(|b| [b.west, b.south, b.east, b.north]),
+            );
+            numbers.as_ptr()
+        }));
+        Ok(())
+    })
+}
+
+/// One region in longitude and latitude (WKB, as snakegrid_lon_lat_boxes()) made ready to be
+/// projected to the working CRS `crs`, which splits the globe on the meridian opposite its
+/// centre: rings that step across ±180° are carried across, and a region across that meridian
+/// is cut there, its pieces on either edge of the map. Projected as drawn, such a region would
+/// become a band round the globe. Writes a little-endian WKB MultiPolygon to `*out` and its
+/// length to `*out_len`, valid until the next call of this function on the same thread; or
+/// NULL and 0 when the region needs no change (nearly every region), so project it as it is.
+///
+/// Fails with SNAKEGRID_INVALID_INPUT when the bytes are not a Polygon or MultiPolygon.
+///
+/// Thread safety: any number of threads may read one handle at once.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_crs_cut(
+    crs: *const Crs,
+    wkb: *const u8,
+    wkb_len: usize,
+    out: *mut *const u8,
+    out_len: *mut usize,
+) -> Status {
+    guard("snakegrid_crs_cut", || {
+        // SAFETY: a live handle or NULL (header contract).
+        let chosen = unsafe { handle::get(crs, "crs") }?;
+        // SAFETY: `out` and `out_len` are NULL or writable (header contract).
+        let (out, out_len) = unsafe { (Out::new(out, "out")?, Out::new(out_len, "out_len")?) };
+        // SAFETY: NULL or `wkb_len` readable bytes (header contract).
+        let wkb = unsafe { handle::slice(wkb, wkb_len, "wkb") }?;
+        let region = crate::wkb::to_multi_polygon(wkb)
+            .map_err(|message| Failure::from(crate::core::Error::input(None, message)))?;
+        match cut_at_seam(&region, chosen.central_meridian) {
+            Some(cut) => CUT.with(|slot| {
+                let mut bytes = slot.borrow_mut();
+                *bytes = crate::wkb::from_multi_polygon(&cut);
+                out_len.write(bytes.len());
+                out.write(bytes.as_ptr());
+            }),
+            None => {
+                out_len.write(0);
+                out.write(std::ptr::null());
+            }
+        }
         Ok(())
     })
 }

@@ -329,6 +329,49 @@ static void test_working_crs(void) {
     snakegrid_crs_free(NULL);
 }
 
+/* A region drawn across the antimeridian as d3's world-atlas draws Chukotka, its ring stepping
+ * from 180 to -180 (a square from 170 to 190, wrapped): its box runs past 180 and it is one
+ * country; on a world map centred on 0 it is cut at ±180, centred on it is carried across. */
+static void test_antimeridian(void) {
+    wkb_buffer b = {{0}, 0};
+    const double ring[5][2] = {{170.0, 60.0}, {-170.0, 60.0}, {-170.0, 70.0}, {170.0, 70.0},
+                               {170.0, 60.0}};
+    b.bytes[b.len++] = 1;
+    put_u32(&b, 3, 0);
+    put_u32(&b, 1, 0);
+    put_u32(&b, 5, 0);
+    for (int i = 0; i < 5; i++) {
+        put_f64(&b, ring[i][0], 0);
+        put_f64(&b, ring[i][1], 0);
+    }
+    const double *boxes = NULL;
+    size_t count = 0;
+    CHECK_OK(snakegrid_lon_lat_boxes(b.bytes, b.len, &boxes, &count));
+    CHECK(count == 1 && boxes[0] == 170.0 && boxes[2] == 190.0);
+    snakegrid_crs *crs = NULL;
+    const char *text = NULL;
+    CHECK_OK(snakegrid_working_crs(boxes, count, &crs));
+    CHECK_OK(snakegrid_crs_name(crs, &text));
+    CHECK(strcmp(text, "Lambert azimuthal equal-area at 65.0N 180.0E (snakegrid)") == 0);
+    const uint8_t *cut = NULL;
+    size_t cut_len = 0;
+    CHECK_OK(snakegrid_crs_cut(crs, b.bytes, b.len, &cut, &cut_len));
+    CHECK(cut != NULL && cut_len > 9 && cut[0] == 1 && cut[1] == 6); /* one MultiPolygon */
+    snakegrid_crs_free(crs);
+    const double world[4] = {-180.0, -60.0, 180.0, 80.0};
+    crs = NULL;
+    CHECK_OK(snakegrid_working_crs(world, 1, &crs));
+    CHECK_OK(snakegrid_crs_cut(crs, b.bytes, b.len, &cut, &cut_len));
+    CHECK(cut != NULL && cut[5] == 2 && cut[6] == 0); /* two pieces, one each side of ±180 */
+    wkb_buffer inside = {{0}, 0};
+    put_square(&inside, 10.0, 40.0, 5.0, 0);
+    CHECK_OK(snakegrid_crs_cut(crs, inside.bytes, inside.len, &cut, &cut_len));
+    CHECK(cut == NULL && cut_len == 0);
+    CHECK_FAILS(snakegrid_crs_cut(crs, inside.bytes, 3, &cut, &cut_len), SNAKEGRID_INVALID_INPUT);
+    CHECK_FAILS(snakegrid_lon_lat_boxes(NULL, 0, &boxes, &count), SNAKEGRID_NULL_ARGUMENT);
+    snakegrid_crs_free(crs);
+}
+
 /* What a host laying a layer out in its own CRS tells the user: a Mercator projection by GDAL's,
  * PROJ's or QGIS's name, never UTM; and whether a layer without a CRS could be in degrees. */
 static void test_source_crs_advice(void) {
@@ -955,6 +998,7 @@ int main(void) {
     test_options();
     test_option_table();
     test_working_crs();
+    test_antimeridian();
     test_source_crs_advice();
     test_fields();
     test_bad_regions();

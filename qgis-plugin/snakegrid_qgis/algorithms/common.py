@@ -17,6 +17,7 @@ from qgis.core import (
     QgsProcessingException,
     QgsProcessingFeatureSource,
     QgsProcessingOutputNumber,
+    QgsWkbTypes,
 )
 from qgis.PyQt.QtCore import QVariant
 from qgis.PyQt.QtGui import QIcon
@@ -172,21 +173,25 @@ class Features:
             self.geometries.append(None if geometry.isNull() else geometry)
             feedback.setProgress(progress_to * (n + 1) / total)
 
-    def boxes(self):
-        """Each region's extent in the source CRS, for the working-CRS rule."""
-        return [(b.xMinimum(), b.yMinimum(), b.xMaximum(), b.yMaximum())
-                for b in (g.boundingBox() for g in self.geometries
-                          if g is not None and not g.isEmpty())]
+    def drawn(self):
+        """Each region as drawn, for the working-CRS rule: polygons as WKB (the library reads
+        each one's extent, across ±180° where a ring steps across it), other geometries (which
+        the layout then refuses by name) as their boxes."""
+        return [bytes(g.asWkb()) if _polygons(g) else _box(g.boundingBox())
+                for g in self.geometries if g is not None and not g.isEmpty()]
 
-    def wkb(self, crs, context):
-        """The geometries in `crs` as WKB (None for a null geometry)."""
+    def wkb(self, crs, context, cut=None):
+        """The geometries in `crs` as WKB (None for a null geometry); `cut` (the library's
+        WorkingCrs.cut) readies each for the projection first."""
         transform = None
         if self.crs.isValid() and crs.isValid() and crs != self.crs:
             transform = QgsCoordinateTransform(self.crs, crs, context.transformContext())
         out = []
         for label, geometry in zip(self.labels, self.geometries):
             if geometry is not None and transform is not None:
-                geometry = QgsGeometry(geometry)
+                drawn = bytes(geometry.asWkb())
+                ready = cut(drawn) if cut is not None and _polygons(geometry) else drawn
+                geometry = QgsGeometry(geometry) if ready is drawn else geometry_from_wkb(ready)
                 try:
                     geometry.transform(transform)
                 except QgsCsException as e:
@@ -199,9 +204,10 @@ class Features:
 
 def working_crs(sg, features, target, feedback):
     """The CRS to lay out in, as the command line's -t_srs decides: `target` when valid, else
-    the layer's own when projected, else the library's equal-area rule for the features'
-    extents, made from its named WKT2 (QGIS then shows its name; nothing is saved to the
-    user's CRS database). Warns as the command line notes: a layer without a CRS whose
+    the layer's own when projected, else the library's equal-area rule for the features as
+    drawn, made from its named WKT2 (QGIS then shows its name; nothing is saved to the
+    user's CRS database); and, for the rule's CRS, the library's cut that readies each region
+    for it (else None). Warns as the command line notes: a layer without a CRS whose
     coordinates could be degrees, a layer in a Mercator projection (the library decides both)."""
     source = features.crs
     if target.isValid():
@@ -212,30 +218,41 @@ def working_crs(sg, features, target, feedback):
             feedback.pushWarning(
                 f"The target CRS {target.authid()} is geographic: the cells are squares in "
                 "degrees.")
-        return target
+        return target, None
     if not source.isValid():
         message = "The layer has no CRS: its coordinates are taken as planar."
-        if sg.looks_like_degrees(features.boxes()):
+        if sg.looks_like_degrees(features.drawn()):
             message += (" They lie within ±180 and ±90, as longitudes and latitudes would: if "
                         "they are, set the layer's CRS (EPSG:4326 or their own geographic CRS) "
                         "first.")
         feedback.pushWarning(message)
-        return source
+        return source, None
     if not source.isGeographic():
         # A Mercator layer is weighed by its drawn areas: the library says when and why.
         note = sg.projected_crs_note(source.projectionAcronym() or "",
                                      source.authid() or source.description())
         if note:
             feedback.pushWarning(note[0].upper() + note[1:] + ".")
-        return source
-    chosen = sg.working_crs(features.boxes())
+        return source, None
+    chosen = sg.working_crs(features.drawn())
     crs = QgsCoordinateReferenceSystem.fromWkt(chosen.wkt)
     if not crs.isValid():
         raise QgsProcessingException(f"QGIS cannot read the working CRS {chosen.wkt}")
     feedback.pushInfo(
         f"The layer's CRS {source.authid() or source.description()} is geographic: "
         f"{chosen.note}.")
-    return crs
+    return crs, chosen.cut
+
+
+def _polygons(geometry):
+    """Whether the library reads `geometry` (the layout refuses others by name)."""
+    return QgsWkbTypes.flatType(geometry.wkbType()) in (QgsWkbTypes.Polygon,
+                                                         QgsWkbTypes.MultiPolygon)
+
+
+def _box(rectangle):
+    return (rectangle.xMinimum(), rectangle.yMinimum(), rectangle.xMaximum(),
+            rectangle.yMaximum())
 
 
 def geometry_from_wkb(wkb):

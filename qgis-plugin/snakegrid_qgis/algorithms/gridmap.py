@@ -165,9 +165,11 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
                 type=QgsProcessingParameterField.Numeric))
 
     def placement(self, sg, features, parameters_, context, feedback):
-        """The working CRS and the regions' pins (None: no pins)."""
+        """The working CRS, the cut that readies a region for it (None: none needed) and the
+        regions' pins (None: no pins)."""
         target = self.parameterAsCrs(parameters_, TARGET_CRS, context)
-        return common.working_crs(sg, features, target, feedback), features.pins
+        crs, cut = common.working_crs(sg, features, target, feedback)
+        return crs, cut, features.pins
 
     def checkParameterValues(self, parameters_, context):  # noqa: N802
         # The library refuses a bad value by name before any feature is read.
@@ -203,8 +205,8 @@ class GridMapAlgorithm(common.SnakegridAlgorithm):
         feedback.setProgressText("reading the layer")
         features = common.Features(source, id_field, feedback, 10.0, group_field,
                                    [f for f in pin_fields if f])
-        crs, pins = self.placement(sg, features, parameters_, context, feedback)
-        grid = sg.layout(features.wkb(crs, context), features.ids, labels=features.labels,
+        crs, cut, pins = self.placement(sg, features, parameters_, context, feedback)
+        grid = sg.layout(features.wkb(crs, context, cut), features.ids, labels=features.labels,
                          groups=features.groups, pins=pins,
                          progress=common.Progress(feedback, 10.0, 95.0), **options)
         for note in grid.notes:
@@ -331,5 +333,7 @@ class RelayoutAlgorithm(GridMapAlgorithm):
         kept = sum(1 for pin in pins if pin and not pin[2])
         feedback.pushInfo(f"{moved} moved cells and {kept} kept regions pinned; the other "
                           f"{len(pins) - moved - kept} laid out again.")
-        return crs, [None if by_id.get(sg.id_text(i)) is None else by_id[sg.id_text(i)][:2]
-                     for i in features.ids]
+        # The regions go to the edited grid's CRS as drawn: that CRS is the user's now, and
+        # the library's cut is for the CRS its own rule chose.
+        return crs, None, [None if by_id.get(sg.id_text(i)) is None else by_id[sg.id_text(i)][:2]
+                          for i in features.ids]

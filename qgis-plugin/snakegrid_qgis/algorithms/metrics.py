@@ -73,11 +73,11 @@ class GridMetricsAlgorithm(common.SnakegridAlgorithm):
         grid_id = self.parameterAsString(parameters, GRID_ID, context) or region_id
         regions = common.Features(regions_source, region_id, feedback, 20.0)
         cells = common.Features(grid_source, grid_id, feedback, 40.0)
-        crs = common.working_crs(sg, cells, QgsCoordinateReferenceSystem(), feedback)
+        crs, cut = common.working_crs(sg, cells, QgsCoordinateReferenceSystem(), feedback)
         feedback.setProgressText("scoring")
-        cell_wkb = cells.wkb(crs, context)
+        cell_wkb = cells.wkb(crs, context, cut)
         layout, per_region = sg.score(
-            regions.wkb(crs, context), regions.ids, cell_wkb, cells.ids,
+            regions.wkb(crs, context, cut), regions.ids, cell_wkb, cells.ids,
             region_labels=regions.labels, cell_labels=cells.labels)
         feedback.setProgress(90.0)
 

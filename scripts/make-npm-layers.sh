@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Real layers the shared data does not have, from npm packages (the registry this machine can
+# reach): d3's world-atlas (countries at 1:110m, 1:50m, 1:10m, in TopoJSON, with Russia and Fiji
+# drawn by rings that step across ±180°) and Highcharts' map collection (the first-level
+# divisions of countries, in TopoJSON in longitude and latitude: France with its overseas
+# regions, Japan, Indonesia, the Philippines, Chile, Norway, Russia, ...). Each is written as a
+# GeoPackage layer "regions" in EPSG:4326 with an id field `id` (world-atlas: the country name,
+# its numeric code is missing for a few) and `name`. For trying snakegrid on countries and
+# quirks it was not tuned on; the layers' licences are their packages' (Natural Earth's data,
+# Highcharts' terms), so they are made here, not committed.
+#
+# Usage: scripts/make-npm-layers.sh [DIR]   (default /tmp/npm-layers; needs npm and ogr2ogr)
+set -euo pipefail
+
+out="${1:-/tmp/npm-layers}"
+mkdir -p "$out/npm"
+(cd "$out/npm" && npm install --silent --no-audit --no-fund @highcharts/map-collection world-atlas)
+modules="$out/npm/node_modules"
+
+for scale in 110m 50m 10m; do
+    ogr2ogr -overwrite -f GPKG -a_srs EPSG:4326 -nln regions -nlt PROMOTE_TO_MULTI \
+        -sql "SELECT name AS id, name FROM countries" \
+        "$out/world$scale.gpkg" "$modules/world-atlas/countries-$scale.json"
+done
+
+countries="au br ca cl cn de dk es fr gb gr hr id in it jp mx no nz ph ru"
+for country in $countries; do
+    ogr2ogr -overwrite -f GPKG -a_srs EPSG:4326 -nln regions -nlt PROMOTE_TO_MULTI \
+        -sql "SELECT \"hc-key\" AS id, name FROM \"default\"" \
+        "$out/$country.gpkg" "$modules/@highcharts/map-collection/countries/$country/$country-all.topo.json"
+done
+echo "layers in $out: world110m world50m world10m $countries"
