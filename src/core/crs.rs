@@ -307,19 +307,25 @@ pub fn lon_lat_boxes(region: &MultiPolygon<f64>) -> Vec<LonLatBox> {
 /// round the globe.
 pub fn cut_at_seam(region: &MultiPolygon<f64>, central: f64) -> Option<MultiPolygon<f64>> {
     let (west_edge, east_edge) = (central - 180.0, central + 180.0);
-    let inside = |ring: &LineString<f64>| {
+    let within = |ring: &LineString<f64>, slack: f64| {
         matches!(continuous(ring), Cow::Borrowed(_))
-            && ring
-                .0
-                .iter()
-                .all(|c| (west_edge..=east_edge).contains(&c.x))
+            && (ring.0.iter()).all(|c| (west_edge - slack..=east_edge + slack).contains(&c.x))
     };
-    if region
-        .0
-        .iter()
-        .all(|part| inside(part.exterior()) && part.interiors().iter().all(&inside))
-    {
+    let all_within = |slack: f64| {
+        (region.0.iter()).all(|part| {
+            within(part.exterior(), slack) && part.interiors().iter().all(|r| within(r, slack))
+        })
+    };
+    if all_within(0.0) {
         return None;
+    }
+    // A vertex a rounding error past the seam (180.00000000000006 after a reprojection) is
+    // moved onto it: the projection would carry it to the far edge of the map.
+    if all_within(SEAM_ROUNDING) {
+        return Some(region.map_coords(|c| Coord {
+            x: c.x.clamp(west_edge, east_edge),
+            ..c
+        }));
     }
     let mut pieces = Vec::new();
     for part in &region.0 {
@@ -373,6 +379,9 @@ pub fn cut_at_seam(region: &MultiPolygon<f64>, central: f64) -> Option<MultiPoly
     }
     Some(MultiPolygon(pieces))
 }
+
+/// Degrees past the seam that are a rounding error, not a crossing (about 0.1 mm).
+const SEAM_ROUNDING: f64 = 1e-9;
 
 fn shifted(ring: LineString<f64>, dx: f64) -> LineString<f64> {
     ring.map_coords(|c| Coord { x: c.x + dx, ..c })
@@ -500,6 +509,23 @@ mod tests {
         let france = MultiPolygon(vec![wrapped_square(-5.0, 8.0, 42.0, 51.0)]);
         assert_eq!(cut_at_seam(&france, 0.0), None);
         assert_eq!(cut_at_seam(&chukotka, 175.0).map(|c| area(&c)), Some(160.0));
+        // Fiji taken back to lon/lat from Equal Earth reaches 180.00000000000006: put on 180.
+        let east = 180.00000000000006;
+        let rounded = MultiPolygon(vec![Polygon::new(
+            LineString::from(vec![
+                (178.0, -18.0),
+                (east, -18.0),
+                (east, -16.0),
+                (178.0, -18.0),
+            ]),
+            vec![],
+        )]);
+        let onto = cut_at_seam(&rounded, 0.0).unwrap();
+        assert_eq!(
+            onto.0[0].exterior().0.len(),
+            rounded.0[0].exterior().0.len()
+        );
+        assert!(onto.0[0].exterior().0.iter().all(|c| c.x <= 180.0));
     }
 
     #[test]
