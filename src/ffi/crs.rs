@@ -5,6 +5,7 @@
 use super::handle::{self, Handle, Out};
 use super::status::{c_string, guard, guard_free, Failure, Status};
 use crate::crs::{cut_at_seam, looks_like_degrees, projected_note, working_crs, LonLatBox};
+use geo::MultiPolygon;
 use std::cell::RefCell;
 use std::ffi::{c_char, CString};
 
@@ -175,9 +176,7 @@ pub unsafe extern "C" fn snakegrid_lon_lat_boxes(
         // SAFETY: `boxes` and `count` are NULL or writable (header contract).
         let (boxes, count) = unsafe { (Out::new(boxes, "boxes")?, Out::new(count, "count")?) };
         // SAFETY: NULL or `wkb_len` readable bytes (header contract).
-        let wkb = unsafe { handle::slice(wkb, wkb_len, "wkb") }?;
-        let region = crate::wkb::to_multi_polygon(wkb)
-            .map_err(|message| Failure::from(crate::core::Error::input(None, message)))?;
+        let region = unsafe { region(wkb, wkb_len) }?;
         let found = crate::crs::lon_lat_boxes(&region);
         count.write(found.len());
         boxes.write(BOXES.with(|slot| {
@@ -220,9 +219,7 @@ pub unsafe extern "C" fn snakegrid_crs_cut(
         // SAFETY: `out` and `out_len` are NULL or writable (header contract).
         let (out, out_len) = unsafe { (Out::new(out, "out")?, Out::new(out_len, "out_len")?) };
         // SAFETY: NULL or `wkb_len` readable bytes (header contract).
-        let wkb = unsafe { handle::slice(wkb, wkb_len, "wkb") }?;
-        let region = crate::wkb::to_multi_polygon(wkb)
-            .map_err(|message| Failure::from(crate::core::Error::input(None, message)))?;
+        let region = unsafe { region(wkb, wkb_len) }?;
         match cut_at_seam(&region, chosen.central_meridian) {
             Some(cut) => CUT.with(|slot| {
                 let mut bytes = slot.borrow_mut();
@@ -237,6 +234,17 @@ pub unsafe extern "C" fn snakegrid_crs_cut(
         }
         Ok(())
     })
+}
+
+/// The region in `wkb_len` bytes at `wkb`, a WKB Polygon or MultiPolygon.
+///
+/// # Safety
+/// `wkb` NULL or valid for `wkb_len` bytes.
+unsafe fn region(wkb: *const u8, wkb_len: usize) -> Result<MultiPolygon<f64>, Failure> {
+    // SAFETY: the caller's guarantee.
+    let wkb = unsafe { handle::slice(wkb, wkb_len, "wkb") }?;
+    crate::wkb::to_multi_polygon(wkb)
+        .map_err(|message| Failure::from(crate::core::Error::input(None, message)))
 }
 
 /// Frees a CRS handle. NULL is ignored.
