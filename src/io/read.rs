@@ -301,6 +301,7 @@ pub(crate) fn boxes(drawn: &[Option<MultiPolygon<f64>>]) -> Vec<LonLatBox> {
 /// WKB in one call and the bytes are parsed on every core: the binding's own conversion asks
 /// GDAL for one vertex at a time, on one core, a tenth of a second at 10⁶ vertices
 /// (BENCHMARKS.md "Dense boundaries").
+///
 /// With `seam` (the working CRS's central meridian and the geometries as drawn, when the
 /// working-CRS rule chose it), a region across the meridian opposite, or drawn stepping across
 /// ±180°, is cut there first ([`crate::crs::cut_at_seam`]).
