@@ -339,18 +339,14 @@ pub fn cut_at_seam(region: &MultiPolygon<f64>, central: f64) -> Option<MultiPoly
             let hole = continuous(hole).into_owned();
             let centre = hole.bounding_rect().map_or(middle, |b| b.center().x);
             let turns = ((middle - centre) / 360.0).round();
-            shifted(hole, 360.0 * turns)
+            shifted(&hole, 360.0 * turns)
         });
         let part = Polygon::new(exterior, holes.collect());
         // The turns of the globe the part spans, one meridian on the seam counting to the west.
         let first = ((extent.min().x - west_edge) / 360.0).floor() as i64;
         let last = (((extent.max().x - west_edge) / 360.0).ceil() as i64 - 1).max(first);
         if first == last {
-            let turns = -360.0 * first as f64;
-            pieces.push(part.map_coords(|c| Coord {
-                x: c.x + turns,
-                ..c
-            }));
+            pieces.push(shifted(&part, -360.0 * first as f64));
             continue;
         }
         for turn in first..=last {
@@ -383,8 +379,9 @@ pub fn cut_at_seam(region: &MultiPolygon<f64>, central: f64) -> Option<MultiPoly
 /// Degrees past the seam that are a rounding error, not a crossing (about 0.1 mm).
 const SEAM_ROUNDING: f64 = 1e-9;
 
-fn shifted(ring: LineString<f64>, dx: f64) -> LineString<f64> {
-    ring.map_coords(|c| Coord { x: c.x + dx, ..c })
+/// `geometry` moved `dx` degrees east.
+fn shifted<G: MapCoords<f64, f64>>(geometry: &G, dx: f64) -> G::Output {
+    geometry.map_coords(|c| Coord { x: c.x + dx, ..c })
 }
 
 #[cfg(test)]

@@ -189,8 +189,9 @@ class Features:
         out = []
         for label, geometry in zip(self.labels, self.geometries):
             if geometry is not None and transform is not None:
-                drawn = bytes(geometry.asWkb())
-                ready = cut(drawn) if cut is not None and _polygons(geometry) else drawn
+                # Only a region the library cuts is rebuilt; the rest are projected as read.
+                drawn = bytes(geometry.asWkb()) if cut is not None and _polygons(geometry) else None
+                ready = drawn if drawn is None else cut(drawn)
                 geometry = QgsGeometry(geometry) if ready is drawn else geometry_from_wkb(ready)
                 try:
                     geometry.transform(transform)
