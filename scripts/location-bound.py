@@ -55,7 +55,8 @@ def judged_location(region_centres, cell_centres, side):
 def main():
     source = sys.argv[1]
     ratios = [float(r) for r in sys.argv[2:]] or [1.0, 0.9, 0.8, 0.7]
-    geometries = pyogrio.read_dataframe(source).geometry.values
+    # Layers from elsewhere bring invalid rings (TopoJSON quantisation); GEOS needs them valid.
+    geometries = shapely.make_valid(pyogrio.read_dataframe(source).geometry.values)
     union = shapely.union_all(geometries)
     part = max(getattr(union, "geoms", [union]), key=lambda p: p.area)
     on_part = [g for g in geometries if shapely.intersection(g, part).area > 0.5 * g.area]

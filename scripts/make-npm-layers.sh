@@ -9,7 +9,10 @@
 # quirks it was not tuned on; the layers' licences are their packages' (Natural Earth's data,
 # Highcharts' terms), so they are made here, not committed.
 #
-# Usage: scripts/make-npm-layers.sh [DIR]   (default /tmp/npm-layers; needs npm and ogr2ogr)
+# Usage: scripts/make-npm-layers.sh [DIR] [all]   (default /tmp/npm-layers; needs npm and ogr2ogr)
+#   all: also every country of Highcharts' collection, first-level divisions (DIR/hc/CC-all.gpkg)
+#        and second-level ones where it has them (DIR/hc/CC-all-all.gpkg: Germany's districts,
+#        the Netherlands' municipalities, the US counties, ...), for scripts/survey-layers.sh.
 set -euo pipefail
 
 out="${1:-/tmp/npm-layers}"
@@ -30,3 +33,20 @@ for country in $countries; do
         "$out/$country.gpkg" "$modules/@highcharts/map-collection/countries/$country/$country-all.topo.json"
 done
 echo "layers in $out: world110m world50m world10m $countries"
+
+if [ "${2:-}" = all ]; then
+    mkdir -p "$out/hc"
+    for dir in "$modules"/@highcharts/map-collection/countries/*/; do
+        country="$(basename "$dir")"
+        for level in all all-all; do
+            topo="$dir/$country-$level.topo.json"
+            [ -f "$topo" ] || continue
+            # The second-level maps also hold separator lines (insets' frames) without a key:
+            # a layer of regions has none.
+            ogr2ogr -overwrite -f GPKG -a_srs EPSG:4326 -nln regions -nlt PROMOTE_TO_MULTI \
+                -sql "SELECT \"hc-key\" AS id, name FROM \"default\" WHERE \"hc-key\" IS NOT NULL" \
+                "$out/hc/$country-$level.gpkg" "$topo"
+        done
+    done
+    echo "every country's divisions in $out/hc"
+fi
