@@ -26,26 +26,30 @@ for scale in 110m 50m 10m; do
         "$out/world$scale.gpkg" "$modules/world-atlas/countries-$scale.json"
 done
 
+collection="$modules/@highcharts/map-collection/countries"
+
+# One of Highcharts' maps (TopoJSON) as a layer of regions. The second-level maps also hold
+# separator lines (insets' frames) without a key: a layer of regions has none.
+highcharts() {
+    ogr2ogr -overwrite -f GPKG -a_srs EPSG:4326 -nln regions -nlt PROMOTE_TO_MULTI \
+        -sql "SELECT \"hc-key\" AS id, name FROM \"default\" WHERE \"hc-key\" IS NOT NULL" \
+        "$2" "$1"
+}
+
 countries="au br ca cl cn de dk es fr gb gr hr id in it jp mx no nz ph ru"
 for country in $countries; do
-    ogr2ogr -overwrite -f GPKG -a_srs EPSG:4326 -nln regions -nlt PROMOTE_TO_MULTI \
-        -sql "SELECT \"hc-key\" AS id, name FROM \"default\"" \
-        "$out/$country.gpkg" "$modules/@highcharts/map-collection/countries/$country/$country-all.topo.json"
+    highcharts "$collection/$country/$country-all.topo.json" "$out/$country.gpkg"
 done
 echo "layers in $out: world110m world50m world10m $countries"
 
 if [ "${2:-}" = all ]; then
     mkdir -p "$out/hc"
-    for dir in "$modules"/@highcharts/map-collection/countries/*/; do
+    for dir in "$collection"/*/; do
         country="$(basename "$dir")"
         for level in all all-all; do
             topo="$dir/$country-$level.topo.json"
             [ -f "$topo" ] || continue
-            # The second-level maps also hold separator lines (insets' frames) without a key:
-            # a layer of regions has none.
-            ogr2ogr -overwrite -f GPKG -a_srs EPSG:4326 -nln regions -nlt PROMOTE_TO_MULTI \
-                -sql "SELECT \"hc-key\" AS id, name FROM \"default\" WHERE \"hc-key\" IS NOT NULL" \
-                "$out/hc/$country-$level.gpkg" "$topo"
+            highcharts "$topo" "$out/hc/$country-$level.gpkg"
         done
     done
     echo "every country's divisions in $out/hc"
