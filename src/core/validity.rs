@@ -938,8 +938,9 @@ mod tests {
             })
             .collect();
         assert!(!Runs::new(std::slice::from_ref(&square)).crowded());
-        let square = Polygon::new(geo::LineString(square), vec![]);
-        assert!(!examine(&MultiPolygon(vec![square])).crowded);
+        // Star-shaped too, so `examine` decides it without an index (and reports it uncrowded
+        // whatever the index would say): the index's own verdict is the one above.
+        assert_eq!(check(Polygon::new(geo::LineString(square), vec![])), None);
     }
 
     #[test]
