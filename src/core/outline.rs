@@ -766,39 +766,51 @@ fn simplify(
     // time, then plain Visvalingam, which needs no segment index; the topology-preserving
     // variant only if that made rings cross.
     let finest = FINEST_DETAIL.min(tolerance.unwrap_or(f64::INFINITY));
-    let plain = close_gaps(visvalingam(&thin(union, 0.1 * finest.sqrt()), finest));
-    // The outline is checked where it is simplified to its target, and that check suffices
-    // when it passes: checking the finely simplified one first was a tenth of the run on a
-    // star of long spikes (their boxes all overlap, so the index compares most of them). Only
-    // if the result crosses is the fine outline checked, and replaced if it crosses itself.
-    if tolerance.is_some() || vertex_count(&plain.0) > target {
-        let eps = tolerance.unwrap_or_else(|| tolerance_for(&plain.0, target));
-        let simplified = plain.0.simplify_vw_preserve(eps);
-        if !coarse(&simplified) {
-            return (simplified, plain.1);
-        }
-    }
-    let fine = Some(plain)
-        .filter(|(p, _)| !coarse(p))
-        .or_else(|| {
-            Some(close_gaps(union.simplify_vw_preserve(finest))).filter(|(p, _)| !coarse(p))
-        })
-        .unwrap_or_else(|| close_gaps(union.clone()));
-    let (fine, joined) = (&fine.0, fine.1);
-    let eps = match tolerance {
-        Some(eps) => eps,
-        None if vertex_count(fine) <= target => return (fine.clone(), joined),
-        None => tolerance_for(fine, target),
+    // The fine outline is checked for crossings only once a simplification of it crosses: when
+    // that simplification passes, its own check suffices (checking the fine outline first was a
+    // tenth of the run on a star of long spikes, whose boxes all overlap in the index). A fine
+    // outline that crosses itself is replaced, and the search starts again from the replacement.
+    let replacement = || {
+        Some(close_gaps(union.simplify_vw_preserve(finest)))
+            .filter(|(p, _)| !coarse(p))
+            .unwrap_or_else(|| close_gaps(union.clone()))
     };
-    let mut eps = eps;
-    while eps > 1e-12 {
-        let simplified = fine.simplify_vw_preserve(eps);
-        if !coarse(&simplified) {
-            return (simplified, joined);
+    let mut fine = close_gaps(visvalingam(&thin(union, 0.1 * finest.sqrt()), finest));
+    // Whether `fine` is known not to cross itself, or is the last resort.
+    let mut settled = false;
+    'fine: loop {
+        let mut eps = match tolerance {
+            Some(eps) => eps,
+            None if vertex_count(&fine.0) <= target => {
+                if settled || !coarse(&fine.0) {
+                    return fine;
+                }
+                (fine, settled) = (replacement(), true);
+                continue;
+            }
+            None => tolerance_for(&fine.0, target),
+        };
+        while eps > 1e-12 {
+            let simplified = fine.0.simplify_vw_preserve(eps);
+            if !coarse(&simplified) {
+                return (simplified, fine.1);
+            }
+            if !settled {
+                settled = true;
+                if coarse(&fine.0) {
+                    fine = replacement();
+                    continue 'fine;
+                }
+            }
+            eps *= 0.5;
         }
-        eps *= 0.5;
+        // No tolerance simplified it without crossings (or the one given was too small to try).
+        return if settled || !coarse(&fine.0) {
+            fine
+        } else {
+            replacement()
+        };
     }
-    (fine.clone(), joined)
 }
 
 /// Tolerances below this simplify nothing that matters (cells² in the unit-cell frame), and a
