@@ -51,7 +51,8 @@ if status == "ok":
     with open(rows, "a") as out:
         out.write("\t".join(map(str, [len(r["regions"])] + values)) + "\n")
 else:
-    message = open(errors).read().strip().splitlines()[-1].replace("|", "/")
+    lines = open(errors).read().strip().splitlines()
+    message = (lines[-1] if lines else "no message (the run ended without one)").replace("|", "/")
     print(f"| {name} | | {wall:.2f} | refused: {message} |||||||")
 EOF
 done
@@ -60,8 +61,11 @@ import sys
 rows = [list(map(float, line.split("\t"))) for line in open(sys.argv[1])]
 large = [r for r in rows if r[0] >= 30]
 print()
+if not large:
+    print(f"{len(rows)} layers laid out; none of 30 regions or more")
+    sys.exit()
 print(f"{len(rows)} layers laid out; over the {len(large)} of 30 regions or more, means: "
-      + ", ".join(f"{name} {sum(r[k] for r in large) / max(len(large), 1):.3f}"
+      + ", ".join(f"{name} {sum(r[k] for r in large) / len(large):.3f}"
                   for k, name in enumerate(["regions", "adjacency", "orientation", "location",
                                             "p90", "max", "shape"])))
 EOF

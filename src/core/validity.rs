@@ -9,7 +9,8 @@
 //! or a ring touching itself, all invalid, except that two different rings may touch at a
 //! point. With no such pair, the rings are disjoint curves, so one point of each
 //! ring decides how the rings nest: each hole inside its own shell and outside its polygon's
-//! other holes, no part inside another part.
+//! other holes, no part inside another part. A geometry of one ring that is star-shaped about
+//! its centroid is simple without either, in O(n) ([`star_shaped`]).
 
 use super::geometry::{crosses_ray, Segment};
 use geo::kernels::{Kernel, Orientation, RobustKernel};
