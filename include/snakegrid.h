@@ -1069,8 +1069,9 @@ snakegrid_status snakegrid_edit_pins(const struct snakegrid_regions *cells,
  * one box for the whole layer, also do, but a region drawn across the antimeridian then spans
  * the globe). Writes a new handle to `*out`.
  *
- * A layer spanning more than 180° of longitude gets Equal Earth, any other Lambert azimuthal
- * equal-area centred on it; a layer whose CRS is already projected needs no call (lay it out
+ * A layer spanning more than 180° of longitude gets Equal Earth, or Lambert azimuthal
+ * equal-area centred on a pole when it lies within 45° of that pole; any other Lambert
+ * azimuthal equal-area centred on it; a layer whose CRS is already projected needs no call (lay it out
  * in its own CRS), as the command line does.
  *
  * Fails with SNAKEGRID_INVALID_INPUT when the numbers cannot be longitudes and latitudes (the
@@ -1136,7 +1137,8 @@ snakegrid_status snakegrid_lon_lat_boxes(const uint8_t *wkb,
  * projected to the working CRS `crs`, which splits the globe on the meridian opposite its
  * centre: rings that step across ±180° are carried across, and a region across that meridian
  * is cut there, its pieces on either edge of the map. Projected as drawn, such a region would
- * become a band round the globe. Writes a little-endian WKB MultiPolygon to `*out` and its
+ * become a band round the globe. A working CRS centred on a pole splits nothing and changes no
+ * region. Writes a little-endian WKB MultiPolygon to `*out` and its
  * length to `*out_len`, valid until the next call of this function on the same thread; or
  * NULL and 0 when the region needs no change (nearly every region), so project it as it is.
  *

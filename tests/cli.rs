@@ -1413,3 +1413,64 @@ fn pin_fields_number_the_cells_in_the_pins_frame() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("pin_row"), "{}", stderr(&out));
 }
+
+#[test]
+fn a_layer_round_a_pole_is_laid_out_round_the_pole() {
+    // Two rings of twelve 30° sectors round the South Pole (80°S to the pole, 70°S to 80°S), as
+    // a layer of Antarctic regions is drawn in longitude and latitude: the inner sectors run to
+    // the pole along its parallel, and the sectors on either side of ±180° meet there, at x =
+    // 180 and x = -180. The layer spans 360° of longitude; in Equal Earth those two meridians
+    // are the map's two edges, which parted the sectors round the pole.
+    let scratch = Scratch::new("pole");
+    let src = scratch.path("antarctic.gpkg");
+    let mut rows = Vec::new();
+    for sector in 0..12 {
+        let (west, east) = (-180.0 + 30.0 * sector as f64, -150.0 + 30.0 * sector as f64);
+        for (ring, (south, north)) in [(-90.0, -80.0), (-80.0, -70.0)].into_iter().enumerate() {
+            // Vertices every 5° along the parallels, so that the edges follow them.
+            let along = |lat: f64, from: f64, to: f64| -> Vec<String> {
+                (0..=6)
+                    .map(|k| format!("{} {lat}", from + (to - from) * k as f64 / 6.0))
+                    .collect()
+            };
+            let mut ring_points = along(south, west, east);
+            ring_points.extend(along(north, east, west));
+            ring_points.push(ring_points[0].clone());
+            rows.push((
+                format!("s{sector}r{ring}"),
+                format!("POLYGON(({}))", ring_points.join(",")),
+            ));
+        }
+    }
+    let rows: Vec<(&str, Option<&str>)> = (rows.iter())
+        .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))
+        .collect();
+    write_layer(&src, "regions", 4326, &rows);
+    let (dst, report) = (scratch.path("grid.gpkg"), scratch.path("grid.json"));
+    let output = snakegrid(["-id", "code", "-json", p(&report), p(&dst), p(&src)]);
+    assert_success(&output);
+    let summary = stdout(&output);
+    assert!(
+        summary.contains(
+            "within 45° of the South Pole, so it is projected to Lambert azimuthal \
+                          equal-area centred on the pole"
+        ),
+        "{summary}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    // By hand: 12 pairs round each ring and 12 between the rings; the sectors on either side of
+    // ±180° are neighbours.
+    assert_eq!(report["adjacent_pairs"], 36, "{summary}");
+    // The layout keeps the rings: 1.000 on 2026-12-06, where Equal Earth's map of the same
+    // layer, the two rings torn open on the map's edges, kept 0.559 of 34 pairs. 0.9 allows a
+    // few pairs lost to another candidate.
+    let adjacent = report["metrics"]["adjacent"].as_f64().unwrap();
+    assert!(adjacent >= 0.9, "{summary}");
+    let written = Dataset::open(&dst).unwrap();
+    let srs = written.layer(0).unwrap().spatial_ref().unwrap();
+    let proj4 = srs.to_proj4().unwrap();
+    assert!(proj4.contains("+proj=laea +lat_0=-90"), "{proj4}");
+    let (_, rows) = read_rows(&dst);
+    assert_eq!(assert_grid(&rows, "code").len(), 24);
+}

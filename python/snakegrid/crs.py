@@ -34,7 +34,8 @@ class WorkingCrs:
         (snakegrid_crs_cut): a region drawn across ±180° is carried across, and one across the
         meridian opposite the centre is cut there, its pieces on either edge of the map;
         projected as drawn, it would become a band round the globe. Nearly every region comes
-        back as it was given, the same object."""
+        back as it was given, the same object; round a pole (a CRS centred on it) every region
+        does."""
         wkb = _geometry.to_wkb(geometry)
         if wkb is None:
             return geometry

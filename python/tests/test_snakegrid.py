@@ -252,6 +252,12 @@ def test_a_region_drawn_across_the_antimeridian_is_read_and_cut_right():
     assert isinstance(world.cut(chukotka.wkb), bytes)
     france = Polygon([(0, 45), (5, 45), (5, 50), (0, 50)])
     assert world.cut(france) is france
+    # Round a pole nothing is split: a layer of the Antarctic is centred on the South Pole, and
+    # a region across ±180° there is projected as drawn.
+    antarctic = snakegrid.working_crs([(-180, -90, 180, -60)])
+    assert antarctic.name == "Lambert azimuthal equal-area at 90.0S 0.0E (snakegrid)"
+    ross = Polygon([(170, -80), (-170, -80), (-170, -70), (170, -70), (170, -80)])
+    assert antarctic.cut(ross) is ross
 
 
 def test_working_crs_refuses_what_cannot_be_degrees():

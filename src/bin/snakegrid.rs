@@ -77,7 +77,8 @@ struct Cli {
     )]
     pin_row: Option<String>,
     /// Working and output CRS, any definition GDAL accepts [default: the source CRS; a geographic
-    /// source is projected to Lambert azimuthal equal-area centred on the layer]
+    /// source is projected to Lambert azimuthal equal-area centred on the layer, a world layer
+    /// (over 180° of longitude) to Equal Earth, one round a pole to Lambert azimuthal on the pole]
     #[arg(long = "t_srs", value_name = "CRS", allow_hyphen_values = true)]
     t_srs: Option<String>,
     /// Write a machine-readable report (parameters, metrics, Snake run, candidates, regions)

@@ -6,6 +6,10 @@
 //! - A layer whose longitudes span more than half the globe (a world map) gets Equal Earth,
 //!   centred on the middle of its longitudes (EPSG:8857 for a layer centred on Greenwich): an
 //!   azimuthal projection would split the Pacific and wrap America round Asia.
+//! - A layer that spans more than half the globe's longitudes but lies within 45° of a pole
+//!   (the Arctic, the Antarctic) gets Lambert azimuthal equal-area centred on that pole: Equal
+//!   Earth would split the regions round the pole on its edge meridian and stretch them along
+//!   the bottom or top of the map.
 //! - Any other layer gets Lambert azimuthal equal-area centred on its extent.
 //!
 //! Longitudes are taken across the antimeridian where that is shorter (Fiji, Chukotka and
@@ -35,9 +39,10 @@ pub struct WorkingCrs {
     pub name: String,
     /// What the user should be told: which projection, where, and why.
     pub note: String,
-    /// Its central meridian: the globe is split on the meridian opposite, where
-    /// [`cut_at_seam`] cuts the regions before they are projected.
-    pub central_meridian: f64,
+    /// Its central meridian, when the globe is split on the meridian opposite, where
+    /// [`cut_at_seam`] cuts the regions before they are projected; `None` for a projection
+    /// centred on a pole, which splits nothing.
+    pub central_meridian: Option<f64>,
 }
 
 /// What the user should know about laying a layer out in its own projected CRS `crs` (a name
@@ -85,6 +90,13 @@ pub fn looks_like_degrees(boxes: &[LonLatBox]) -> bool {
 /// Longitude spans (the antimeridian-aware range) above this get a world projection.
 const WORLD_SPAN: f64 = 180.0;
 
+/// Degrees from a pole within which a layer wider than [`WORLD_SPAN`] is taken round that pole.
+/// Within 45° of its centre Lambert azimuthal equal-area changes lengths by at most 8 % (1/cos
+/// 22.5° across, cos 22.5° along the radius), less than Equal Earth does at those latitudes away
+/// from its central meridian; a layer reaching nearer the equator is more of a world map, and
+/// its readers expect one.
+const POLAR_REACH: f64 = 45.0;
+
 /// The working CRS for a layer in longitude and latitude whose regions have the extents
 /// `boxes`. Refuses coordinates that cannot be longitudes and latitudes (a layer whose CRS is
 /// wrong), naming the extent found.
@@ -121,6 +133,38 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
     }
     let (west, east) = longitude_range(finite.iter().map(|b| (b.west, b.east)).collect());
     let lon = wrap((west + east) / 2.0);
+    let pole = if south >= 90.0 - POLAR_REACH {
+        Some(90.0)
+    } else if north <= POLAR_REACH - 90.0 {
+        Some(-90.0)
+    } else {
+        None
+    };
+    if let (true, Some(pole)) = (east - west > WORLD_SPAN, pole) {
+        // The middle of the layer's longitudes runs straight up from the North Pole's
+        // projection, or straight down to the South Pole's: north is up there.
+        let centre = format!("{} {}", latitude_text(pole), longitude_text(lon));
+        let name = format!("Lambert azimuthal equal-area at {centre} (snakegrid)");
+        return Ok(WorkingCrs {
+            wkt: projected(
+                &name,
+                "Lambert Azimuthal Equal Area",
+                9820,
+                &[(LATITUDE_OF_ORIGIN, pole), (LONGITUDE_OF_ORIGIN, lon)],
+            ),
+            note: format!(
+                "the layer spans {:.0}° of longitude within {POLAR_REACH:.0}° of the {} Pole, so \
+                 it is projected to Lambert azimuthal equal-area centred on the pole, the meridian \
+                 {} straight {} it (equal-area, keeps the regions round the pole together)",
+                east - west,
+                if pole > 0.0 { "North" } else { "South" },
+                longitude_text(lon),
+                if pole > 0.0 { "below" } else { "above" },
+            ),
+            name,
+            central_meridian: None,
+        });
+    }
     if east - west > WORLD_SPAN {
         let name = if lon.abs() < 1e-9 {
             "WGS 84 / Equal Earth Greenwich".to_owned()
@@ -136,7 +180,7 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
                 longitude_text(lon)
             ),
             name,
-            central_meridian: lon,
+            central_meridian: Some(lon),
         });
     }
     let lat = (south + north) / 2.0;
@@ -151,7 +195,7 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
         ),
         note: format!("projected to Lambert azimuthal equal-area centred on the layer ({centre})"),
         name,
-        central_meridian: lon,
+        central_meridian: Some(lon),
     })
 }
 
@@ -474,9 +518,9 @@ mod tests {
         assert_eq!((boxes[1].west, boxes[1].east), (27.0, 190.0));
         let crs = working_crs(&boxes).unwrap();
         assert!(crs.name.starts_with("Lambert azimuthal"), "{}", crs.name);
-        assert!((crs.central_meridian - 104.8).abs() < 1e-9);
+        assert!((crs.central_meridian.unwrap() - 104.8).abs() < 1e-9);
         // Centred there, the mainland is carried across ±180° whole, not cut.
-        let ready = cut_at_seam(&russia, crs.central_meridian).unwrap();
+        let ready = cut_at_seam(&russia, 104.8).unwrap();
         assert_eq!(ready.0.len(), 2);
         let mainland = ready.0[1].bounding_rect().unwrap();
         assert_eq!((mainland.min().x, mainland.max().x), (27.0, 190.0));
@@ -631,6 +675,41 @@ mod tests {
         // Exactly half the globe is still one country's azimuthal projection.
         let half = working_crs(&boxes(&[(-90.0, 0.0, 90.0, 10.0)])).unwrap();
         assert!(half.name.starts_with("Lambert"), "{}", half.name);
+    }
+
+    #[test]
+    fn a_layer_round_a_pole_is_centred_on_the_pole() {
+        // The Antarctic: all longitudes, south of 60°S; the pole's meridian points at 0°.
+        let antarctic = working_crs(&boxes(&[(-180.0, -90.0, 180.0, -60.0)])).unwrap();
+        assert_eq!(
+            antarctic.name,
+            "Lambert azimuthal equal-area at 90.0S 0.0E (snakegrid)"
+        );
+        assert!(antarctic.wkt.contains(
+            "PARAMETER[\"Latitude of natural origin\",-90,ANGLEUNIT[\"degree\",0.0174532925199433]"
+        ));
+        assert_eq!(antarctic.central_meridian, None);
+        assert!(antarctic.note.contains("South Pole"), "{}", antarctic.note);
+        // An Arctic ring from Alaska round to Chukotka, 51°N at its southernmost, open over
+        // Greenwich: centred on the middle of its longitudes, across the Bering Strait, which
+        // runs straight down from the North Pole.
+        let arctic = working_crs(&boxes(&[
+            (-170.0, 51.0, -10.0, 83.0),
+            (10.0, 60.0, 178.0, 81.0),
+        ]))
+        .unwrap();
+        assert_eq!(
+            arctic.name,
+            "Lambert azimuthal equal-area at 90.0N 180.0E (snakegrid)"
+        );
+        assert!(arctic.note.contains("North Pole"), "{}", arctic.note);
+        // A layer round the pole that reaches to 40°N is a world map (45° from the pole).
+        let northern = working_crs(&boxes(&[(-180.0, 40.0, 180.0, 83.0)])).unwrap();
+        assert_eq!(northern.name, "WGS 84 / Equal Earth Greenwich");
+        // Near a pole but narrower than 180° (Greenland): centred on the layer, as any other.
+        let greenland = working_crs(&boxes(&[(-73.0, 59.8, -11.0, 83.6)])).unwrap();
+        assert!(greenland.name.contains("71.7N 42.0W"), "{}", greenland.name);
+        assert_eq!(greenland.central_meridian, Some(-42.0));
     }
 
     #[test]

@@ -16,8 +16,8 @@ pub(crate) struct Plan {
     /// What the user should know about it.
     pub note: Option<String>,
     /// The central meridian of the working CRS the rule chose for a layer in longitude and
-    /// latitude: regions are cut on the meridian opposite before they are projected
-    /// ([`crate::crs::cut_at_seam`]).
+    /// latitude, when it splits the globe: regions are cut on the meridian opposite before they
+    /// are projected ([`crate::crs::cut_at_seam`]).
     pub seam: Option<f64>,
 }
 
@@ -95,7 +95,7 @@ pub(crate) fn plan(
                     chosen.note
                 )),
                 working: Some(working),
-                seam: Some(chosen.central_meridian),
+                seam: chosen.central_meridian,
             })
         }
         (Some(source), None) => {
