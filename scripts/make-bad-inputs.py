@@ -267,6 +267,17 @@ def main():
          'regions overlap: 15.3 % of their total area is covered more than once ("s2" lies on "s0")',
          why="a feature drawn over another: 0.36 km² of 2.36 km² counted twice (15.3 %)")
 
+    # A 2 × 2 block whose first square is drawn 30 more times: each of the 31 copies lies on
+    # the 30 others and along r01 and r10.
+    copies = block(2, 2) + [feature(f"c{k:02}", "Polygon", square(500000, 5000000, 1000))
+                            for k in range(30)]
+    geojson("stacked_many.geojson", copies)
+    case("stacked_many.geojson", "invalid_input",
+         "feature r00: 32 regions lie on it or along its border",
+         why="a square drawn 31 times in a 2 × 2 block: 465 pairs among the copies, 62 with r01 "
+             "and r10, 2 more in the block: 529 pairs, 31 neighbours per region on average "
+             "(over 24); each copy has 32, r00 is the first")
+
     # A 3 × 3 block of 1 km squares drawn apart: each narrowed by 2 m, so neighbours stand 4 m
     # (a 250th of a cell) apart and share no border.
     apart = [feature(f"a{j}{i}", "Polygon",

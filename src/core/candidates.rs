@@ -50,6 +50,15 @@ const LARGEST_COORDINATE: f64 = 1e100;
 /// vertices: 3.5 s of about 9 s, BENCHMARKS.md "Dense boundaries"; a little less at 10⁶).
 const CHECKING_SHARE: f64 = 0.3;
 
+/// The most neighbouring regions a layer's regions may have on average. Regions side by side
+/// form a planar map, whose regions have fewer than 6 neighbours on average (Euler's formula),
+/// and borders that overlap sloppily or a layer copied into itself once or twice add a few more
+/// (the US counties twice over: 12.2). Only features stacked many deep come near this, where
+/// every copy neighbours every other (500 copies of one square: 499 each), and the layout's work
+/// grows with the neighbours of each region: 25 s for those 500, over 5 minutes and 6 GB for
+/// 3,000.
+const MOST_MEAN_NEIGHBOURS: f64 = 24.0;
+
 /// Draws of a noisy centroid before it is left where it was (a draw must land inside the outline).
 const NOISE_DRAWS: usize = 16;
 
@@ -420,6 +429,7 @@ impl Input {
                 100.0 * share
             ));
         }
+        stacked(&prepared.neighbours, regions, &order)?;
         let across_gaps = prepared.neighbours.len() - prepared.adjacency.len();
         if across_gaps > 0 {
             notes.push(format!(
@@ -435,6 +445,40 @@ impl Input {
             notes,
         })
     }
+}
+
+/// Refuses a layer whose regions have more than [`MOST_MEAN_NEIGHBOURS`] neighbours on average
+/// (`neighbours`: the pairs, indexed as `order` places the regions), naming the region with the
+/// most (the first in input order among equals).
+fn stacked(
+    neighbours: &[(usize, usize)],
+    regions: &[Region],
+    order: &[usize],
+) -> Result<(), Error> {
+    let mean = 2.0 * neighbours.len() as f64 / regions.len().max(1) as f64;
+    if mean <= MOST_MEAN_NEIGHBOURS {
+        return Ok(());
+    }
+    let mut counts = vec![0usize; order.len()];
+    for &(i, j) in neighbours {
+        counts[i] += 1;
+        counts[j] += 1;
+    }
+    let Some((most, k)) = (counts.iter().zip(order))
+        .map(|(&count, &k)| (count, k))
+        .min_by_key(|&(count, k)| (std::cmp::Reverse(count), k))
+    else {
+        return Ok(());
+    };
+    Err(Error::input(
+        Some(&regions[k].id),
+        format!(
+            "{most} regions lie on it or along its border, and the layer's regions have {mean:.0} \
+             neighbours each on average, where regions side by side have fewer than 6: features \
+             are stacked on one another (a layer copied into itself, a feature drawn many times); \
+             remove the copies"
+        ),
+    ))
 }
 
 /// The regions' indices ordered by their geometry alone, so that renaming ids or reordering
