@@ -1128,6 +1128,52 @@ mod tests {
         LineString(coords)
     }
 
+    /// A band along a spiral of `turns` turns, `width` wide, its arms `gap` apart (in cells),
+    /// with `n` vertices along each side: simplified coarsely, a chord across a turn of the band
+    /// cuts through the arm beside it.
+    fn spiral(turns: f64, width: f64, gap: f64, n: usize) -> MultiPolygon<f64> {
+        let pitch = (width + gap) / std::f64::consts::TAU;
+        let side = |offset: f64| -> Vec<Coord<f64>> {
+            (0..n)
+                .map(|i| {
+                    let t = 2.0 * std::f64::consts::TAU
+                        + turns * std::f64::consts::TAU * i as f64 / (n - 1) as f64;
+                    let r = pitch * t + offset;
+                    Coord {
+                        x: r * t.cos(),
+                        y: r * t.sin(),
+                    }
+                })
+                .collect()
+        };
+        let mut ring = side(-width / 2.0);
+        ring.extend(side(width / 2.0).into_iter().rev());
+        ring.push(ring[0]);
+        MultiPolygon(vec![Polygon::new(LineString(ring), vec![])])
+    }
+
+    #[test]
+    fn a_simplification_that_would_cross_itself_keeps_more_vertices_instead() {
+        // Three turns of a band a cell wide with gaps of a fifth of a cell (79 cells², 4,000
+        // vertices), to be simplified to 60: plain Visvalingam to that count cuts across the
+        // arms (checked here, so that the test takes the fallback: the tolerance is halved until
+        // nothing crosses), and the outline must not.
+        let band = spiral(3.0, 1.0, 0.2, 2_000);
+        let plain = band.simplify_vw(tolerance_for(&band, 60));
+        assert!(RingIndex::new(&coords_of(&rings_of(&plain))).self_intersects());
+        let (outline, _) = simplify(&band, 60, None);
+        assert!(!RingIndex::new(&coords_of(&rings_of(&outline))).self_intersects());
+        let kept = vertex_count(&outline);
+        assert!(kept > 60 && kept < 4_000, "{kept} vertices");
+        // The band itself is kept: its area within 2 % (chords across a band a cell wide, bent
+        // no tighter than a radius of 2.4 cells, cut off little of it).
+        let (before, after) = (band.unsigned_area(), outline.unsigned_area());
+        assert!(
+            (after - before).abs() < 0.02 * before,
+            "{before} -> {after}"
+        );
+    }
+
     #[test]
     fn removals_give_geos_simplification_for_every_tolerance() {
         for (n, staircase) in [(400, false), (400, true), (3, false), (5, true)] {
