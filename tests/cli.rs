@@ -504,6 +504,14 @@ fn a_table_without_geometry_is_refused_as_such() {
     assert_eq!(scratch.listing(), ["table.gpkg"]);
 }
 
+/// A layer "regions" in EPSG:4326 of (code, WKT) rows at `path`.
+fn write_lon_lat_layer(path: &Path, rows: &[(String, String)]) {
+    let rows: Vec<(&str, Option<&str>)> = (rows.iter())
+        .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))
+        .collect();
+    write_layer(path, "regions", 4326, &rows);
+}
+
 /// Writes a GeoPackage layer `name` in EPSG:`epsg` (field `code`, null when "") with the given
 /// WKT geometries (None: null).
 fn write_layer(path: &Path, name: &str, epsg: u32, rows: &[(&str, Option<&str>)]) {
@@ -1245,10 +1253,7 @@ fn regions_drawn_across_the_antimeridian_are_one_country_not_the_world() {
             ));
         }
     }
-    let rows: Vec<(&str, Option<&str>)> = (rows.iter())
-        .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))
-        .collect();
-    write_layer(&src, "regions", 4326, &rows);
+    write_lon_lat_layer(&src, &rows);
     let dst = scratch.path("grid.gpkg");
     let output = snakegrid(["-id", "code", p(&dst), p(&src)]);
     assert_success(&output);
@@ -1442,10 +1447,7 @@ fn a_layer_round_a_pole_is_laid_out_round_the_pole() {
             ));
         }
     }
-    let rows: Vec<(&str, Option<&str>)> = (rows.iter())
-        .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))
-        .collect();
-    write_layer(&src, "regions", 4326, &rows);
+    write_lon_lat_layer(&src, &rows);
     let (dst, report) = (scratch.path("grid.gpkg"), scratch.path("grid.json"));
     let output = snakegrid(["-id", "code", "-json", p(&report), p(&dst), p(&src)]);
     assert_success(&output);
