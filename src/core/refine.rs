@@ -81,7 +81,7 @@ pub fn refine(
         // No region to draw a proposal for.
         return Some(Vec::new());
     }
-    let links = Links::of(layout);
+    let links = Links::of(layout, params);
     let far = far_from_home(layout, cells, params);
     let problem = Problem::new(layout, params, &links, &far);
     let stripes = stripe_count(cells.len());
@@ -498,10 +498,32 @@ struct Links {
     first: Vec<usize>,
     /// Per link, the index of the same pair seen from the other region.
     reverse: Vec<usize>,
+    /// Per link, its pair's energy ([`PairWeights::energy`]) for each offset of the other
+    /// region's cell within [`TABLE_REACH`] of its own, row by row: the energy depends on the
+    /// offset alone, and working it out (an arctangent, two divisions) was most of a proposal.
+    energies: Vec<f64>,
 }
 
+/// The offsets ([`Tiling::distance`], in columns and rows) for which [`Links`] holds each pair's
+/// energy; a pair further apart has it worked out.
+const TABLE_REACH: i32 = 2;
+const TABLE_SIDE: i32 = 2 * TABLE_REACH + 1;
+
 impl Links {
-    fn of(layout: &Layout) -> Links {
+    /// The energy of the pair of link `link` (whose direction is `direction`) with its cells at
+    /// `from` and `to`.
+    fn energy(&self, link: usize, weights: &PairWeights, from: Position, to: Position) -> f64 {
+        let (dc, dr) = (to.0 - from.0, to.1 - from.1);
+        if dc.abs() <= TABLE_REACH && dr.abs() <= TABLE_REACH {
+            let at = (dr + TABLE_REACH) * TABLE_SIDE + dc + TABLE_REACH;
+            self.energies[link * (TABLE_SIDE * TABLE_SIDE) as usize + at as usize]
+        } else {
+            weights.energy(self.links[link].1, from, to)
+        }
+    }
+
+    fn of(layout: &Layout, params: &Params) -> Links {
+        let weights = PairWeights::of(params);
         let regions = layout.centroids.len();
         let pairs = || layout.adjacency.iter().filter(|(i, j)| i != j);
         let mut first = vec![0; regions + 1];
@@ -525,10 +547,20 @@ impl Links {
             next[i] += 1;
             next[j] += 1;
         }
+        let offsets: Vec<Position> = (-TABLE_REACH..=TABLE_REACH)
+            .flat_map(|dr| (-TABLE_REACH..=TABLE_REACH).map(move |dc| (dc, dr)))
+            .collect();
+        let weights = &weights;
+        let energies = (links.iter())
+            .flat_map(|&(_, direction)| {
+                (offsets.iter()).map(move |&offset| weights.energy(direction, (0, 0), offset))
+            })
+            .collect();
         Links {
             links,
             first,
             reverse,
+            energies,
         }
     }
 }
@@ -548,6 +580,7 @@ struct Problem<'a> {
     links: &'a [(usize, Coord<f64>)],
     first: &'a [usize],
     reverse: &'a [usize],
+    table: &'a Links,
     /// [`Layout::misplaced`], asked once per region and position.
     misplaced: RefCell<FxHashMap<(usize, Position), bool>>,
 }
@@ -568,6 +601,7 @@ impl<'a> Problem<'a> {
             links: &links.links,
             first: &links.first,
             reverse: &links.reverse,
+            table: links,
             misplaced: RefCell::default(),
         }
     }
@@ -699,9 +733,15 @@ impl<'a> Problem<'a> {
             staged.placements.push((region, placement));
             energy += placement;
             for link in self.first[region]..self.first[region + 1] {
-                let (other, direction) = self.links[link];
+                let other = self.links[link].0;
                 if !scope.regions[..k].contains(&other) {
-                    let pair = self.pair(direction, here, self.cell(board.at[other]));
+                    let there = self.cell(board.at[other]);
+                    let pair = (self.table).energy(
+                        link,
+                        &self.pairs,
+                        (here.col, here.row),
+                        (there.col, there.row),
+                    );
                     staged.pairs.push((link, pair));
                     energy += pair;
                 }
@@ -1163,7 +1203,7 @@ mod tests {
     fn energy(layout: &Layout, start: &[usize], cells: &[usize]) -> f64 {
         let params = Params::default();
         let far = far_from_home(layout, start, &params);
-        Problem::new(layout, &params, &Links::of(layout), &far).energy(cells)
+        Problem::new(layout, &params, &Links::of(layout, &params), &far).energy(cells)
     }
 
     /// Pieces and holes of the layout `at`, as the metrics count them.
@@ -1203,7 +1243,7 @@ mod tests {
     fn pair_energy_counts_gap_angle_and_misdirection() {
         let map = Map::new(2, 2, 0);
         let layout = map.layout();
-        let links = Links::of(&layout);
+        let links = Links::of(&layout, &Params::default());
         let no_limit = vec![f64::INFINITY; layout.targets.len()];
         let problem = Problem::new(&layout, &Params::default(), &links, &no_limit);
         let east = Coord { x: 1.0, y: 0.0 };
@@ -1226,11 +1266,38 @@ mod tests {
     }
 
     #[test]
+    fn the_links_table_holds_each_pairs_energy_to_the_bit() {
+        // Every link of a jittered map, for squares and both hexagons, at offsets within the
+        // table and beyond it, from cells anywhere (the energy depends on the offset alone).
+        let (map, _) = scrambled(5, 4, 3);
+        let layout = map.layout();
+        for (cell, orientation) in [("square", "pointy"), ("hex", "pointy"), ("hex", "flat")] {
+            let mut params = Params::default();
+            params.set("cell", cell).unwrap();
+            params.set("hex_orientation", orientation).unwrap();
+            let (links, weights) = (Links::of(&layout, &params), PairWeights::of(&params));
+            assert!(!links.links.is_empty());
+            for (link, &(_, direction)) in links.links.iter().enumerate() {
+                for dc in -4..=4 {
+                    for dr in -4..=4 {
+                        let (from, to) = ((7, -3), (7 + dc, -3 + dr));
+                        assert_eq!(
+                            links.energy(link, &weights, from, to).to_bits(),
+                            weights.energy(direction, from, to).to_bits(),
+                            "{cell}, link {link}, offset ({dc}, {dr})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn the_distance_cost_is_squared_within_the_knee_and_linear_beyond() {
         // Region 0 belongs at cell (0, 0); cells are 1 apart (hand-computed costs).
         let map = Map::new(4, 4, 0);
         let layout = map.layout();
-        let links = Links::of(&layout);
+        let links = Links::of(&layout, &Params::default());
         let no_limit = vec![f64::INFINITY; layout.targets.len()];
         let cost = |knee: f64, col: i32, row: i32| {
             let params = Params {
@@ -1263,7 +1330,7 @@ mod tests {
         // the others start on their own cells.
         let map = Map::new(4, 4, 0);
         let layout = map.layout();
-        let links = Links::of(&layout);
+        let links = Links::of(&layout, &Params::default());
         let mut start: Vec<usize> = (0..16).collect();
         start.swap(0, 3);
         let params = Params {
@@ -1295,7 +1362,7 @@ mod tests {
     fn incremental_deltas_match_full_recomputation() {
         let (map, cells) = scrambled(6, 5, 3);
         let layout = map.layout();
-        let links = Links::of(&layout);
+        let links = Links::of(&layout, &Params::default());
         let no_limit = vec![f64::INFINITY; layout.targets.len()];
         let problem = Problem::new(&layout, &Params::default(), &links, &no_limit);
         let pool = map.lattice.cells.len();
@@ -1410,7 +1477,7 @@ mod tests {
         let (map, cells) = scrambled(8, 5, 4);
         let layout = map.layout();
         let params = Params::default();
-        let links = Links::of(&layout);
+        let links = Links::of(&layout, &params);
         let far = far_from_home(&layout, &cells, &params);
         let problem = Problem::new(&layout, &params, &links, &far);
         let (best, tracked) = anneal(&problem, &cells, &params, 5, &|_| true).unwrap();
@@ -1526,7 +1593,7 @@ mod tests {
         let (map, cells) = perturbed(60, 40, 8, 1_500);
         let layout = map.layout();
         let params = Params::default();
-        let links = Links::of(&layout);
+        let links = Links::of(&layout, &params);
         let pool = map.lattice.cells.len();
         let far = far_from_home(&layout, &cells, &params);
         let problem = Problem::new(&layout, &params, &links, &far);
@@ -1556,7 +1623,7 @@ mod tests {
             refine_moves_per_region: 100,
             ..Params::default()
         };
-        let links = Links::of(&layout);
+        let links = Links::of(&layout, &params);
         let far = far_from_home(&layout, &cells, &params);
         let striped = |tick: Tick| {
             let problem = Problem::new(&layout, &params, &links, &far);
