@@ -517,8 +517,17 @@ const TABLE_SIDE: i32 = 2 * TABLE_REACH + 1;
 const TABLE_BYTES: usize = 8 << 20;
 
 impl Links {
-    /// The energy of the pair of link `link` (whose direction is `direction`) with its cells at
-    /// `from` and `to`.
+    /// The indices of region `region`'s links.
+    fn range(&self, region: usize) -> std::ops::Range<usize> {
+        self.first[region]..self.first[region + 1]
+    }
+
+    /// The regions adjacent to `region`, each with the original direction towards it.
+    fn of_region(&self, region: usize) -> &[(usize, Coord<f64>)] {
+        &self.links[self.range(region)]
+    }
+
+    /// The energy of link `link`'s pair with its cells at `from` and `to`.
     fn energy(&self, link: usize, weights: &PairWeights, from: Position, to: Position) -> f64 {
         let (dc, dr) = (to.0 - from.0, to.1 - from.1);
         if dc.abs() <= TABLE_REACH && dr.abs() <= TABLE_REACH && !self.energies.is_empty() {
@@ -557,18 +566,16 @@ impl Links {
         let offsets: Vec<Position> = (-TABLE_REACH..=TABLE_REACH)
             .flat_map(|dr| (-TABLE_REACH..=TABLE_REACH).map(move |dc| (dc, dr)))
             .collect();
-        let weights = &weights;
-        let entries = links.len() * offsets.len();
-        let energies = (links.iter())
-            .take(if entries * 8 <= TABLE_BYTES {
-                links.len()
-            } else {
-                0
-            })
-            .flat_map(|&(_, direction)| {
-                (offsets.iter()).map(move |&offset| weights.energy(direction, (0, 0), offset))
-            })
-            .collect();
+        let energies = if links.len() * offsets.len() * std::mem::size_of::<f64>() <= TABLE_BYTES {
+            let weights = &weights;
+            (links.iter())
+                .flat_map(|&(_, direction)| {
+                    (offsets.iter()).map(move |&offset| weights.energy(direction, (0, 0), offset))
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         Links {
             links,
             first,
@@ -590,10 +597,7 @@ struct Problem<'a> {
     w_far: f64,
     w_landmass: f64,
     w_notch: f64,
-    links: &'a [(usize, Coord<f64>)],
-    first: &'a [usize],
-    reverse: &'a [usize],
-    table: &'a Links,
+    links: &'a Links,
     /// [`Layout::misplaced`], asked once per region and position.
     misplaced: RefCell<FxHashMap<(usize, Position), bool>>,
 }
@@ -611,10 +615,7 @@ impl<'a> Problem<'a> {
             w_far: params.refine_w_far,
             w_landmass: params.refine_w_landmass,
             w_notch: params.refine_w_notch,
-            links: &links.links,
-            first: &links.first,
-            reverse: &links.reverse,
-            table: links,
+            links,
             misplaced: RefCell::default(),
         }
     }
@@ -630,7 +631,7 @@ impl<'a> Problem<'a> {
 
     /// The regions adjacent to `region`, each with the original direction towards it.
     fn neighbours(&self, region: usize) -> &[(usize, Coord<f64>)] {
-        &self.links[self.first[region]..self.first[region + 1]]
+        self.links.of_region(region)
     }
 
     fn cell(&self, index: usize) -> LatticeCell {
@@ -745,11 +746,11 @@ impl<'a> Problem<'a> {
             let placement = self.placement(region, here);
             staged.placements.push((region, placement));
             energy += placement;
-            for link in self.first[region]..self.first[region + 1] {
-                let other = self.links[link].0;
+            for link in self.links.range(region) {
+                let other = self.links.links[link].0;
                 if !scope.regions[..k].contains(&other) {
                     let there = self.cell(board.at[other]);
-                    let pair = (self.table).energy(
+                    let pair = (self.links).energy(
                         link,
                         &self.pairs,
                         (here.col, here.row),
@@ -769,8 +770,8 @@ impl<'a> Problem<'a> {
         let mut energy = 0.0;
         for (k, &region) in scope.regions.iter().enumerate() {
             energy += terms.placements[region];
-            for link in self.first[region]..self.first[region + 1] {
-                if !scope.regions[..k].contains(&self.links[link].0) {
+            for link in self.links.range(region) {
+                if !scope.regions[..k].contains(&self.links.links[link].0) {
                     energy += terms.pairs[link];
                 }
             }
@@ -832,7 +833,7 @@ impl Terms {
         }
         for &(link, pair) in &self.staged.pairs {
             self.pairs[link] = pair;
-            self.pairs[problem.reverse[link]] = pair;
+            self.pairs[problem.links.reverse[link]] = pair;
         }
     }
 }
