@@ -503,6 +503,8 @@ struct Links {
     /// offset alone, and working it out (an arctangent, two divisions) was most of a proposal.
     /// Empty above [`TABLE_BYTES`].
     energies: Vec<f64>,
+    /// The weights the energies are made with, and pairs outside the table worked out with.
+    weights: PairWeights,
 }
 
 /// The offsets (in columns and rows) for which [`Links`] holds each pair's energy; a pair
@@ -528,13 +530,13 @@ impl Links {
     }
 
     /// The energy of link `link`'s pair with its cells at `from` and `to`.
-    fn energy(&self, link: usize, weights: &PairWeights, from: Position, to: Position) -> f64 {
+    fn energy(&self, link: usize, from: Position, to: Position) -> f64 {
         let (dc, dr) = (to.0 - from.0, to.1 - from.1);
         if dc.abs() <= TABLE_REACH && dr.abs() <= TABLE_REACH && !self.energies.is_empty() {
             let at = (dr + TABLE_REACH) * TABLE_SIDE + dc + TABLE_REACH;
             self.energies[link * (TABLE_SIDE * TABLE_SIDE) as usize + at as usize]
         } else {
-            weights.energy(self.links[link].1, from, to)
+            self.weights.energy(self.links[link].1, from, to)
         }
     }
 
@@ -581,13 +583,13 @@ impl Links {
             first,
             reverse,
             energies,
+            weights,
         }
     }
 }
 
 struct Problem<'a> {
     layout: &'a Layout<'a>,
-    pairs: PairWeights,
     /// `refine_w_location`, on distances in cells ([`Problem::placement`]).
     w_location: f64,
     /// `refine_location_knee`, in cells.
@@ -608,7 +610,6 @@ impl<'a> Problem<'a> {
     fn new(layout: &'a Layout<'a>, params: &Params, links: &'a Links, far: &'a [f64]) -> Self {
         Problem {
             layout,
-            pairs: PairWeights::of(params),
             w_location: params.refine_w_location,
             location_knee: params.refine_location_knee,
             location_far: far,
@@ -623,7 +624,6 @@ impl<'a> Problem<'a> {
     /// The same problem with its cache of landmass answers empty, for another thread.
     fn fresh(&self) -> Problem<'a> {
         Problem {
-            pairs: self.pairs.clone(),
             misplaced: RefCell::default(),
             ..*self
         }
@@ -645,7 +645,7 @@ impl<'a> Problem<'a> {
     /// The energy of an adjacent pair whose original direction is `direction` and whose cells
     /// are `from` and `to`.
     fn pair(&self, direction: Coord<f64>, from: LatticeCell, to: LatticeCell) -> f64 {
-        (self.pairs).energy(direction, (from.col, from.row), (to.col, to.row))
+        (self.links.weights).energy(direction, (from.col, from.row), (to.col, to.row))
     }
 
     /// What region `region` costs on `cell` by itself: its distance from its place, and being
@@ -750,12 +750,8 @@ impl<'a> Problem<'a> {
                 let other = self.links.links[link].0;
                 if !scope.regions[..k].contains(&other) {
                     let there = self.cell(board.at[other]);
-                    let pair = (self.links).energy(
-                        link,
-                        &self.pairs,
-                        (here.col, here.row),
-                        (there.col, there.row),
-                    );
+                    let pair =
+                        (self.links).energy(link, (here.col, here.row), (there.col, there.row));
                     staged.pairs.push((link, pair));
                     energy += pair;
                 }
@@ -1296,7 +1292,7 @@ mod tests {
                     for dr in -4..=4 {
                         let (from, to) = ((7, -3), (7 + dc, -3 + dr));
                         assert_eq!(
-                            links.energy(link, &weights, from, to).to_bits(),
+                            links.energy(link, from, to).to_bits(),
                             weights.energy(direction, from, to).to_bits(),
                             "{cell}, link {link}, offset ({dc}, {dr})"
                         );
