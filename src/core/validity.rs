@@ -15,7 +15,7 @@
 use super::geometry::{crosses_ray, Segment};
 use geo::kernels::{Kernel, Orientation, RobustKernel};
 use geo::line_intersection::{line_intersection, LineIntersection};
-use geo::{Coord, Line, MultiPolygon};
+use geo::{Centroid, Coord, Line, LineString, MultiPolygon, Polygon};
 use rstar::{Envelope, RTree, RTreeObject, AABB};
 use std::collections::BTreeSet;
 use std::fmt;
@@ -113,21 +113,10 @@ fn examined(geometry: &MultiPolygon<f64>, sweep: impl Fn(&Runs) -> bool) -> Exam
 fn star_shaped(ring: &[Coord<f64>]) -> bool {
     let n = ring.len();
     let edge = |i: usize| (ring[i], ring[(i + 1) % n]);
-    // The area centroid by the shoelace formula, about the first vertex for precision.
-    let origin = ring[0];
-    let (mut twice_area, mut cx, mut cy) = (0.0, 0.0, 0.0);
-    for i in 0..n {
-        let (a, b) = edge(i);
-        let (a, b) = (a - origin, b - origin);
-        let cross = a.x * b.y - b.x * a.y;
-        twice_area += cross;
-        cx += (a.x + b.x) * cross;
-        cy += (a.y + b.y) * cross;
-    }
-    let centre = Coord {
-        x: origin.x + cx / (3.0 * twice_area),
-        y: origin.y + cy / (3.0 * twice_area),
+    let Some(centre) = Polygon::new(LineString(ring.to_vec()), vec![]).centroid() else {
+        return false;
     };
+    let centre = centre.0;
     if !(centre.x.is_finite() && centre.y.is_finite()) {
         return false;
     }
