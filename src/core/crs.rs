@@ -143,16 +143,8 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
     if let (true, Some(pole)) = (east - west > WORLD_SPAN, pole) {
         // The middle of the layer's longitudes runs straight up from the North Pole's
         // projection, or straight down to the South Pole's: north is up there.
-        let centre = format!("{} {}", latitude_text(pole), longitude_text(lon));
-        let name = format!("Lambert azimuthal equal-area at {centre} (snakegrid)");
-        return Ok(WorkingCrs {
-            wkt: projected(
-                &name,
-                "Lambert Azimuthal Equal Area",
-                9820,
-                &[(LATITUDE_OF_ORIGIN, pole), (LONGITUDE_OF_ORIGIN, lon)],
-            ),
-            note: format!(
+        let note = |_: &str| {
+            format!(
                 "the layer spans {:.0}° of longitude within {POLAR_REACH:.0}° of the {} Pole, so \
                  it is projected to Lambert azimuthal equal-area centred on the pole, the meridian \
                  {} straight {} it (equal-area, keeps the regions round the pole together)",
@@ -160,9 +152,12 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
                 if pole > 0.0 { "North" } else { "South" },
                 longitude_text(lon),
                 if pole > 0.0 { "below" } else { "above" },
-            ),
-            name,
+            )
+        };
+        // A projection centred on a pole splits no meridian.
+        return Ok(WorkingCrs {
             central_meridian: None,
+            ..lambert_azimuthal(pole, lon, note)
         });
     }
     if east - west > WORLD_SPAN {
@@ -183,20 +178,27 @@ pub fn working_crs(boxes: &[LonLatBox]) -> Result<WorkingCrs, Error> {
             central_meridian: Some(lon),
         });
     }
-    let lat = (south + north) / 2.0;
+    Ok(lambert_azimuthal((south + north) / 2.0, lon, |centre| {
+        format!("projected to Lambert azimuthal equal-area centred on the layer ({centre})")
+    }))
+}
+
+/// Lambert azimuthal equal-area centred on (`lat`, `lon`), split on the meridian opposite, with
+/// the `note` made from its centre as text.
+fn lambert_azimuthal(lat: f64, lon: f64, note: impl Fn(&str) -> String) -> WorkingCrs {
     let centre = format!("{} {}", latitude_text(lat), longitude_text(lon));
     let name = format!("Lambert azimuthal equal-area at {centre} (snakegrid)");
-    Ok(WorkingCrs {
+    WorkingCrs {
         wkt: projected(
             &name,
             "Lambert Azimuthal Equal Area",
             9820,
             &[(LATITUDE_OF_ORIGIN, lat), (LONGITUDE_OF_ORIGIN, lon)],
         ),
-        note: format!("projected to Lambert azimuthal equal-area centred on the layer ({centre})"),
+        note: note(&centre),
         name,
         central_meridian: Some(lon),
-    })
+    }
 }
 
 /// An EPSG projection parameter: its name and code.
