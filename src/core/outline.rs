@@ -750,9 +750,9 @@ fn vertex_count(p: &MultiPolygon<f64>) -> usize {
 /// leaves plain Visvalingam (ten times faster than the topology-preserving variant, and close
 /// enough for "about") with `target` vertices ([`tolerance_for`]); the topology-preserving
 /// variant then runs once. geo preserves topology within each part only, so a result whose
-/// rings cross each other is refused and the tolerance lowered. Parts nearer each other than
-/// the outline's resolution are joined ([`close_gaps`]) once the finest detail is gone (a
-/// hairline apart, simplified rings cross); also says whether any were.
+/// rings cross each other is refused and the tolerance halved ([`halved`]). Parts nearer each
+/// other than the outline's resolution are joined ([`close_gaps`]) once the finest detail is
+/// gone (a hairline apart, simplified rings cross); also says whether any were.
 fn simplify(
     union: &MultiPolygon<f64>,
     target: usize,
@@ -761,56 +761,73 @@ fn simplify(
     if tolerance.is_none() && vertex_count(union) <= target {
         return close_gaps(union.clone());
     }
-    let coarse = |p: &MultiPolygon<f64>| RingIndex::new(&coords_of(&rings_of(p))).self_intersects();
-    // Vertices within a tenth of the finest detail of the last one kept go first, in linear
-    // time, then plain Visvalingam, which needs no segment index; the topology-preserving
-    // variant only if that made rings cross.
     let finest = FINEST_DETAIL.min(tolerance.unwrap_or(f64::INFINITY));
-    // The fine outline is checked for crossings only once a simplification of it crosses: when
-    // that simplification passes, its own check suffices (checking the fine outline first was a
-    // tenth of the run on a star of long spikes, whose boxes all overlap in the index). A fine
-    // outline that crosses itself is replaced, and the search starts again from the replacement.
-    let replacement = || {
-        Some(close_gaps(union.simplify_vw_preserve(finest)))
-            .filter(|(p, _)| !coarse(p))
-            .unwrap_or_else(|| close_gaps(union.clone()))
-    };
-    let mut fine = close_gaps(visvalingam(&thin(union, 0.1 * finest.sqrt()), finest));
-    // Whether `fine` is known not to cross itself, or is the last resort.
-    let mut settled = false;
-    'fine: loop {
-        let mut eps = match tolerance {
-            Some(eps) => eps,
-            None if vertex_count(&fine.0) <= target => {
-                if settled || !coarse(&fine.0) {
-                    return fine;
-                }
-                (fine, settled) = (replacement(), true);
-                continue;
-            }
-            None => tolerance_for(&fine.0, target),
-        };
-        while eps > 1e-12 {
+    // Vertices within a tenth of the finest detail of the last one kept go first, in linear
+    // time, then plain Visvalingam, which needs no segment index.
+    let fine = close_gaps(visvalingam(&thin(union, 0.1 * finest.sqrt()), finest));
+    // The fine outline is checked for crossings only once it or a simplification of it has to
+    // be: when the simplification passes, its own check suffices (checking the fine outline
+    // first was a tenth of the run on a star of long spikes, whose boxes all overlap in the
+    // index).
+    match tolerance_to_try(&fine.0, target, tolerance) {
+        None if !crosses(&fine.0) => return fine,
+        None => {}
+        Some(eps) => {
             let simplified = fine.0.simplify_vw_preserve(eps);
-            if !coarse(&simplified) {
+            if !crosses(&simplified) {
                 return (simplified, fine.1);
             }
-            if !settled {
-                settled = true;
-                if coarse(&fine.0) {
-                    fine = replacement();
-                    continue 'fine;
-                }
+            if !crosses(&fine.0) {
+                return halved(fine, 0.5 * eps);
             }
-            eps *= 0.5;
         }
-        // No tolerance simplified it without crossings (or the one given was too small to try).
-        return if settled || !coarse(&fine.0) {
-            fine
-        } else {
-            replacement()
-        };
     }
+    // Plain Visvalingam made the fine outline cross itself: the topology-preserving variant
+    // makes it instead, or, if its parts still cross each other, the union as it is.
+    let fine = Some(close_gaps(union.simplify_vw_preserve(finest)))
+        .filter(|(p, _)| !crosses(p))
+        .unwrap_or_else(|| close_gaps(union.clone()));
+    match tolerance_to_try(&fine.0, target, tolerance) {
+        None => fine,
+        Some(eps) => halved(fine, eps),
+    }
+}
+
+/// Whether two rings of `outline` cross, or one crosses itself.
+fn crosses(outline: &MultiPolygon<f64>) -> bool {
+    RingIndex::new(&coords_of(&rings_of(outline))).self_intersects()
+}
+
+/// Tolerances at or below this are not tried: they would simplify nothing.
+const SMALLEST_TRIED: f64 = 1e-12;
+
+/// The tolerance to simplify `fine` with: the one given, or the one that leaves about `target`
+/// vertices ([`tolerance_for`]); `None` when there is nothing to simplify.
+fn tolerance_to_try(
+    fine: &MultiPolygon<f64>,
+    target: usize,
+    tolerance: Option<f64>,
+) -> Option<f64> {
+    let eps = match tolerance {
+        Some(eps) => eps,
+        None if vertex_count(fine) <= target => return None,
+        None => tolerance_for(fine, target),
+    };
+    (eps > SMALLEST_TRIED).then_some(eps)
+}
+
+/// `fine` (whose rings do not cross, or which is the last resort) simplified by geo's
+/// topology-preserving Visvalingam with the first of `eps`, `eps / 2`, `eps / 4`, … whose
+/// rings do not cross each other; `fine` itself if none.
+fn halved(fine: (MultiPolygon<f64>, bool), mut eps: f64) -> (MultiPolygon<f64>, bool) {
+    while eps > SMALLEST_TRIED {
+        let simplified = fine.0.simplify_vw_preserve(eps);
+        if !crosses(&simplified) {
+            return (simplified, fine.1);
+        }
+        eps *= 0.5;
+    }
+    fine
 }
 
 /// Tolerances below this simplify nothing that matters (cells² in the unit-cell frame), and a
