@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # How the command line's time and peak memory grow with the number of regions: random Voronoi
-# layers (scripts/make-test-layers.py) of 1,000 to 100,000 regions, each laid out with the
+# layers (scripts/make-test-layers.py) of 1,000 to 100,000 regions (with BENCH_LAYER=strip, a
+# thin country of as many: Voronoi cells of a strip 0.7 cells wide), each laid out with the
 # defaults (or the options given), wall time as the median of 5 runs where one takes under a
 # minute (else one run), peak resident memory from GNU time, and the growth exponent fitted to
 # time ∝ n^k between successive sizes. Prints a Markdown table for BENCHMARKS.md.
@@ -24,9 +25,10 @@ bench_header "$root" "$@"
 echo "| regions | runs | median wall (s) | peak memory (MB) | growth k (time ∝ n^k) |"
 echo "|---:|---:|---:|---:|---:|"
 previous=""
+kind="${BENCH_LAYER:-voronoi}"
 for n in ${sizes//,/ }; do
-    layer="$work/voronoi_$n.gpkg"
-    python3 "$root/scripts/make-test-layers.py" voronoi "$n" 1 "$layer"
+    layer="$work/${kind}_$n.gpkg"
+    python3 "$root/scripts/make-test-layers.py" "$kind" "$n" 1 "$layer"
     timed_runs "$work" "$cli" -q -overwrite "$@" "$work/out.gpkg" "$layer"
     growth="–"
     if [ -n "$previous" ]; then

@@ -52,6 +52,21 @@ const COARSEST: usize = 256;
 /// regions, so that a cancel is heard well within 0.2 s.
 const TICK_ROWS: usize = 64;
 
+/// Rounds a solve started from a like problem's prices may take before they are given up.
+/// A start from a lattice shifted by part of a cell is a good guess where the regions stay near
+/// their cells: on the US counties, Voronoi layers and archipelagos every such solve ends in
+/// one or two rounds. Where they travel far along a thin country (1,000 regions in a strip
+/// one cell wide), the shift moves the prices by the potential's steep slope, and each round
+/// moved the search's reach by a few cells: some 75 rounds of every row, 20 s for the layer.
+const WARM_ROUNDS: usize = 4;
+
+/// How a solve ended.
+enum Run {
+    Solved,
+    Cancelled,
+    OutOfRounds,
+}
+
 /// Marks a free row or column.
 const NONE: usize = usize::MAX;
 
@@ -217,14 +232,24 @@ impl PartialOrd for Entry {
 
 impl<'a> Sparse<'a> {
     /// Solves the problem, starting from `start` or else from the prices of a coarser one;
-    /// `None` when `tick` cancels (see [`assign`]).
+    /// `None` when `tick` cancels (see [`assign`]). A start that has not led to the optimum
+    /// within [`WARM_ROUNDS`] rounds is given up for the coarser problem's prices.
     fn solved(costs: &'a Costs<'a>, start: Option<Vec<f64>>, tick: Tick) -> Option<Self> {
-        let prices = match start {
-            Some(prices) => prices,
-            None => estimated_prices(costs, tick)?,
-        };
+        let tried = start.is_some();
+        if let Some(prices) = start {
+            let mut solver = Sparse::new(costs, prices);
+            match solver.run(tick, Some(WARM_ROUNDS)) {
+                Run::Solved => return Some(solver),
+                Run::Cancelled => return None,
+                Run::OutOfRounds => {}
+            }
+        }
+        // After a start given up, the work was counted already: only a cancel is heard.
+        let quiet = |_: f64| tick(0.0);
+        let tick: Tick = if tried { &quiet } else { tick };
+        let prices = estimated_prices(costs, tick)?;
         let mut solver = Sparse::new(costs, prices);
-        solver.run(tick).then_some(solver)
+        matches!(solver.run(tick, None), Run::Solved).then_some(solver)
     }
 
     fn new(costs: &'a Costs<'a>, prices: Vec<f64>) -> Self {
@@ -272,12 +297,13 @@ impl<'a> Sparse<'a> {
         }
     }
 
-    /// Assigns every row optimally; false when `tick` cancels. The first round, which assigns
-    /// every row, counts as the whole work: the rounds after it are few and short.
-    fn run(&mut self, tick: Tick) -> bool {
+    /// Assigns every row optimally, in at most `rounds` rounds when given. The first round,
+    /// which assigns every row, counts as the whole work: the rounds after it are usually few
+    /// and short.
+    fn run(&mut self, tick: Tick, rounds: Option<usize>) -> Run {
         let n = self.costs.len();
         let mut first = true;
-        loop {
+        for _ in 0..rounds.unwrap_or(usize::MAX) {
             let mut searches = 0;
             for row in 0..n {
                 if self.col_of[row] == NONE {
@@ -290,22 +316,23 @@ impl<'a> Sparse<'a> {
                             0.0
                         })
                     {
-                        return false;
+                        return Run::Cancelled;
                     }
                 }
             }
             if first && !tick((searches % TICK_ROWS) as f64 / n as f64) {
                 // The searches after the last tick complete the share.
-                return false;
+                return Run::Cancelled;
             }
             first = false;
             if !self.widen() {
-                return true;
+                return Run::Solved;
             }
             if !tick(0.0) {
-                return false;
+                return Run::Cancelled;
             }
         }
+        Run::OutOfRounds
     }
 
     fn reduced(&self, row: usize, col: usize) -> f64 {
@@ -702,7 +729,7 @@ mod tests {
     fn sparse(points: &[Coord<f64>], cells: &[Coord<f64>]) -> Vec<usize> {
         let costs = Costs::new(points, cells);
         let mut solver = Sparse::new(&costs, vec![0.0; costs.len()]);
-        assert!(solver.run(&|_| true));
+        assert!(matches!(solver.run(&|_| true, None), Run::Solved));
         solver.col_of
     }
 
@@ -749,7 +776,7 @@ mod tests {
         let (points, cells) = crowded(&mut rng, DENSE_LIMIT + 50);
         let costs = Costs::new(&points, &cells);
         let mut solver = Sparse::new(&costs, vec![0.0; costs.len()]);
-        assert!(solver.run(&|_| true));
+        assert!(matches!(solver.run(&|_| true, None), Run::Solved));
         assert_eq!(solve(&points, &cells), solver.col_of);
         assert!(is_permutation(&solver.col_of));
         let cost = total(&points, &cells, &solver.col_of);
@@ -793,6 +820,48 @@ mod tests {
             (c - optimum).abs() < 1e-9 * optimum,
             "cold {c}, optimum {optimum}"
         );
+    }
+
+    #[test]
+    fn a_start_that_fails_its_rounds_is_given_up_for_the_optimum() {
+        // A country one cell wide: regions in a row, twice as dense in the east, so that the
+        // optimal pairs run up to an eighth of the row apart. The start comes from a row of
+        // cells a quarter of the row further east (on a thin strip two layouts' cells can
+        // cover different stretches of it), so the prices west of it are guessed from its end.
+        let n = 1000;
+        let points: Vec<Coord<f64>> = (0..n)
+            .map(|k| {
+                let t = k as f64 / n as f64;
+                Coord {
+                    x: n as f64 * (1.5 * t - 0.5 * t * t),
+                    y: 0.0,
+                }
+            })
+            .collect();
+        let row = |start: f64| -> Vec<Coord<f64>> {
+            (0..n)
+                .map(|k| Coord {
+                    x: start + k as f64,
+                    y: 0.0,
+                })
+                .collect()
+        };
+        let (east, cells) = (row(0.25 * n as f64), row(0.5));
+        let (_, prices) = assign_from(&points, &east, None, &|_| true).expect("not cancelled");
+        let prices = prices.expect("the sparse solver gives its prices");
+        let start = interpolated(&prices.cells, &prices.values, &cells);
+        let costs = Costs::new(&points, &cells);
+        assert!(
+            matches!(
+                Sparse::new(&costs, start).run(&|_| true, Some(WARM_ROUNDS)),
+                Run::OutOfRounds
+            ),
+            "the start was good enough: this test no longer tests giving it up"
+        );
+        // On a line the optimum with squared distances pairs points and cells in order.
+        let (found, _) =
+            assign_from(&points, &cells, Some(&prices), &|_| true).expect("not cancelled");
+        assert_eq!(found, (0..n).collect::<Vec<_>>());
     }
 
     #[test]
