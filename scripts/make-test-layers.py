@@ -13,6 +13,8 @@
     make-test-layers.py strip N SEED OUT.gpkg       a long thin country (Chile, Norway, Vietnam):
                                                     Voronoi cells of a tilted strip 0.7 cells
                                                     wide, N regions
+    make-test-layers.py ring N WIDTH SEED OUT.gpkg  a country round a lake (or an atoll): Voronoi
+                                                    cells of a ring WIDTH cells wide, N regions
     make-test-layers.py apart SRC CELLS OUT.gpkg    SRC with every region narrowed by CELLS cells
                                                     (a cell: the square root of the mean region
                                                     area), so that neighbours stand 2 x CELLS
@@ -181,6 +183,22 @@ def strip(n, seed):
     return [f"s{k}" for k in range(n)], cells
 
 
+def ring(n, width, seed):
+    """Voronoi cells of a ring of radius SIDE / 2, `width` cells wide (a cell: the ring's area
+    / n). Its points are drawn in polar coordinates, evenly over the ring's area."""
+    rng = np.random.default_rng(seed)
+    radius = SIDE / 2
+    # The ring's area 2πR·w holds n cells of side w / width.
+    w = 2 * math.pi * radius * width**2 / n
+    land = shapely.Point(0, 0).buffer(radius + w / 2, 4096).difference(
+        shapely.Point(0, 0).buffer(radius - w / 2, 4096)
+    )
+    angle = rng.uniform(0, 2 * math.pi, n)
+    r = np.sqrt(rng.uniform((radius - 0.45 * w) ** 2, (radius + 0.45 * w) ** 2, n))
+    points = list(zip(r * np.cos(angle), r * np.sin(angle)))
+    return [f"g{k}" for k in range(n)], voronoi_tiles(points, land)
+
+
 def wiggled(a, b, pieces, straight):
     """The points between `a` and `b` (exclusive) on a wiggle that depends only on the segment,
     not on its direction: both regions beside a shared edge get the same vertices. A segment
@@ -282,6 +300,9 @@ def main(argv):
     elif kind == "strip":
         ids, geometries = strip(int(args[0]), int(args[1]))
         write(args[2], ids, geometries)
+    elif kind == "ring":
+        ids, geometries = ring(int(args[0]), float(args[1]), int(args[2]))
+        write(args[3], ids, geometries)
     elif kind == "apart":
         ids, geometries, crs = apart(args[0], float(args[1]))
         write(args[2], ids, geometries, crs)
