@@ -53,11 +53,12 @@ const COARSEST: usize = 256;
 const TICK_ROWS: usize = 64;
 
 /// Rounds a solve started from a like problem's prices may take before they are given up.
-/// A start from a lattice shifted by part of a cell is a good guess where the regions stay near
-/// their cells: on the US counties, Voronoi layers and archipelagos every such solve ends in
-/// one or two rounds. Where they travel far along a thin country (1,000 regions in a strip
-/// one cell wide), the shift moves the prices by the potential's steep slope, and each round
-/// moved the search's reach by a few cells: some 75 rounds of every row, 20 s for the layer.
+/// A start from a lattice shifted by part of a cell is a good guess where both problems' cells
+/// cover the same ground: on the US counties, Voronoi layers and archipelagos every such solve
+/// ends in one or two rounds. On a thin country (1,000 regions in a strip 0.7 cells wide) two
+/// layouts' cells can cover different stretches of it, the prices beyond the like problem's
+/// cells are guesses from its last ones, and each round let the search reach a few cells
+/// further: some 75 rounds of every row per solve, 20 s for the layer.
 const WARM_ROUNDS: usize = 4;
 
 /// How a solve ended.
@@ -824,8 +825,8 @@ mod tests {
 
     #[test]
     fn a_start_that_fails_its_rounds_is_given_up_for_the_optimum() {
-        // A country one cell wide: regions in a row, twice as dense in the east, so that the
-        // optimal pairs run up to an eighth of the row apart. The start comes from a row of
+        // A country one cell wide: regions in a row, three times as dense in the east as in
+        // the west, so that the optimal pairs run up to an eighth of the row apart. The start comes from a row of
         // cells a quarter of the row further east (on a thin strip two layouts' cells can
         // cover different stretches of it), so the prices west of it are guessed from its end.
         let n = 1000;

@@ -477,7 +477,7 @@ fn enclosed_by<'a>(piece: impl IntoIterator<Item = &'a Position> + Copy, tiling:
         return 0;
     };
     let positions = (high.0 - low.0 + 1) as usize * (high.1 - low.1 + 1) as usize;
-    if positions > MOSTLY_EMPTY * piece.into_iter().count() + 4096 {
+    if positions > SMALL_BOX.max(MOSTLY_EMPTY * piece.into_iter().count()) {
         enclosed_by_loops(&piece.into_iter().copied().collect(), tiling)
     } else {
         enclosed_in_box(piece, (low, high), tiling)
@@ -532,18 +532,26 @@ fn enclosed_in_box<'a>(
 /// five positions per cell (Voronoi 3,000: 1.2; us_counties 2.2; world_countries 4.4).
 const MOSTLY_EMPTY: usize = 64;
 
+/// A box of at most this many positions is flooded whatever its piece: 4 KB of states, less
+/// than the hash map of corners the loops need (a lone island's box holds 9 positions).
+const SMALL_BOX: usize = 4096;
+
 /// [`enclosed_by`] from `piece`'s boundary loops: the area of its inner (clockwise) loops, in
 /// cells.
 fn enclosed_by_loops(piece: &HashSet<Position>, tiling: Tiling) -> u32 {
-    let corners = tiling.corners((0, 0));
-    let cell: Vec<Corner> = (0..=corners.len())
-        .map(|k| corners[k % corners.len()])
-        .collect();
     let inner: i64 = (boundary_loops(piece, tiling).iter())
         .map(|ring| twice_area(ring))
         .filter(|&area| area < 0)
         .sum();
-    (-inner / twice_area(&cell)) as u32
+    (-inner / twice_area(&unit_cell_ring(tiling))) as u32
+}
+
+/// The corners of the cell at (0, 0), closed: a cell's area in the loops' units.
+fn unit_cell_ring(tiling: Tiling) -> Vec<Corner> {
+    let corners = tiling.corners((0, 0));
+    (0..=corners.len())
+        .map(|k| corners[k % corners.len()])
+        .collect()
 }
 
 /// Twice the signed area of a closed ring of corners (first corner repeated at the end), in
@@ -868,11 +876,7 @@ mod tests {
         // A cell's area in corner units, which the loops' areas are divided by: 1 for squares;
         // 6 for hexagons, whose corner units are a quarter of the width by half the side.
         for (tiling, twice) in [(tilings[0], 2), (tilings[1], 12), (tilings[2], 12)] {
-            let corners = tiling.corners((0, 0));
-            let ring: Vec<Corner> = (0..=corners.len())
-                .map(|k| corners[k % corners.len()])
-                .collect();
-            assert_eq!(twice_area(&ring), twice, "{tiling:?}");
+            assert_eq!(twice_area(&unit_cell_ring(tiling)), twice, "{tiling:?}");
         }
     }
 
