@@ -54,8 +54,9 @@ const TICK_ROWS: usize = 64;
 
 /// Rounds a solve started from a like problem's prices may take before they are given up.
 /// A start from a lattice shifted by part of a cell is a good guess where both problems' cells
-/// cover the same ground: on the US counties, Voronoi layers and archipelagos every such solve
-/// ends in one or two rounds. On a thin country (1,000 regions in a strip 0.7 cells wide) two
+/// cover the same ground: on the shared layers, the generated Voronoi layers, islands, river,
+/// strip and archipelago, and the US layers at 10⁶ vertices, squares and hexagons, no such
+/// solve needs more rounds than this. On a thin country (1,000 regions in a strip 0.7 cells wide) two
 /// layouts' cells can cover different stretches of it, the prices beyond the like problem's
 /// cells are guesses from its last ones, and each round let the search reach a few cells
 /// further: some 75 rounds of every row per solve, 20 s for the layer.
