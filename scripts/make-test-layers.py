@@ -185,7 +185,8 @@ def strip(n, seed):
 
 def ring(n, width, seed):
     """Voronoi cells of a ring of radius SIDE / 2, `width` cells wide (a cell: the ring's area
-    / n). Its points are drawn in polar coordinates, evenly over the ring's area."""
+    / n). Its points are drawn in polar coordinates, evenly over the ring's middle nine tenths
+    across."""
     rng = np.random.default_rng(seed)
     radius = SIDE / 2
     # The ring's area 2πR·w holds n cells of side w / width.
