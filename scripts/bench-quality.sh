@@ -31,6 +31,8 @@ make river 33 6 "$work/river_33.gpkg"
 make archipelago 3000 300 5 "$work/archipelago.gpkg"
 # a long thin country of 40 regions, 0.7 cells wide
 make strip 40 9 "$work/strip.gpkg"
+# a country round a lake of 300 regions, 0.7 cells wide
+make ring 300 0.7 1 "$work/ring.gpkg"
 # us_states with neighbours a five-hundredth of a cell apart, judged against us_states itself
 # (its own regions share no border for the judge to count)
 make apart "$data/us_states.gpkg" 0.001 "$work/us_states_apart.gpkg"
@@ -40,7 +42,7 @@ layers=(
     "$data/world_countries.gpkg" "$data/us_counties.gpkg"
     "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
     "$work/river_33.gpkg"
-    "$work/archipelago.gpkg" "$work/strip.gpkg" "$work/us_states_apart.gpkg"
+    "$work/archipelago.gpkg" "$work/strip.gpkg" "$work/ring.gpkg" "$work/us_states_apart.gpkg"
 )
 
 rows="$work/rows.tsv"
@@ -125,7 +127,8 @@ markdown_rows() {
     echo "from \`scripts/make-test-layers.py\`: random Voronoi cells of 300 and 3,000 regions, three"
     echo "far-apart landmasses with islands (\`islands\`), Voronoi cells cut by a winding river gap"
     echo "(\`river\`), a mainland of 3,000 Voronoi cells ringed by 300 one-region islands"
-    echo "(\`archipelago\`), a long thin country of 40 Voronoi cells 0.7 cells wide (\`strip\`), and"
+    echo "(\`archipelago\`), a long thin country of 40 Voronoi cells 0.7 cells wide (\`strip\`), a"
+    echo "country of 300 Voronoi cells round a lake, 0.7 cells wide (\`ring\`), and"
     echo "us_states with every state narrowed by a thousandth of a cell (\`us_states_apart\`: regions"
     echo "drawn one by one, neighbours a hairline apart), judged against us_states itself."
     echo

@@ -483,3 +483,82 @@ fn regions_drawn_a_hairline_apart_are_laid_out_as_one_landmass() {
         "{m:?} against {reference:?}"
     );
 }
+
+/// A country round a lake (or an atoll) of `count` regions: a ring 0.7 cells wide (`count`
+/// cells of area 0.49 in a ring 0.49 wide and `count` long), cut across at uneven angles, each
+/// region's arcs drawn with a vertex every tenth of its length.
+fn thin_ring(count: usize) -> Vec<Region> {
+    let width = 0.49;
+    let radius = count as f64 / std::f64::consts::TAU;
+    let cut = |j: usize| {
+        let j = j as f64;
+        (j + 0.25 * (1.7 * j).sin()) / count as f64 * std::f64::consts::TAU
+    };
+    let at = |angle: f64, r: f64| Coord {
+        x: r * angle.cos(),
+        y: r * angle.sin(),
+    };
+    let (inner, outer) = (radius - width / 2.0, radius + width / 2.0);
+    (0..count)
+        .map(|j| {
+            let (a, b) = (cut(j), cut(j + 1));
+            let arc = |r: f64| (0..=10).map(move |k| at(a + (b - a) * k as f64 / 10.0, r));
+            let mut ring: Vec<Coord<f64>> = arc(inner).collect();
+            ring.extend(arc(outer).collect::<Vec<_>>().into_iter().rev());
+            ring.push(ring[0]);
+            Region {
+                id: format!("r{j}"),
+                geometry: MultiPolygon(vec![Polygon::new(LineString(ring), vec![])]),
+                group: None,
+                pin: None,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn a_ring_thinner_than_a_cell_closes_round_its_lake() {
+    // Its outline offers more cells along it than its regions need: the best of them made an
+    // arc over part of it, and the regions of the rest lay far from their cells (on this ring
+    // of 150 as squares: C_location 16.2 cells, no cell in 114° of directions;
+    // scripts/make-test-layers.py ring 300 0.7 1: 31 cells). Drawn smaller and thicker for its
+    // cells (thin.rs), it takes a closed loop (0.65 cells).
+    let regions = thin_ring(150);
+    for (cell, orientation) in [
+        (CellShape::Square, HexOrientation::Pointy),
+        (CellShape::Hex, HexOrientation::Pointy),
+    ] {
+        let params = Params {
+            cell,
+            hex_orientation: orientation,
+            ..Params::default()
+        };
+        let map = run(&regions, &params);
+        common::assert_valid_grid(&regions, &map);
+        let m = map.metrics;
+        assert_eq!(m.pieces, 1, "{cell:?}: {m:?}");
+        // The cells go all the way round: seen from their mean, no direction is without a
+        // cell for more than 20° (an arc over half the ring leaves 180°).
+        let n = map.cells.len() as f64;
+        let (cx, cy) = (map.cells.iter()).fold((0.0, 0.0), |(x, y), c| {
+            (x + f64::from(c.col) / n, y + f64::from(c.row) / n)
+        });
+        let mut angles: Vec<f64> = (map.cells.iter())
+            .map(|c| {
+                (f64::from(c.row) - cy)
+                    .atan2(f64::from(c.col) - cx)
+                    .to_degrees()
+            })
+            .collect();
+        angles.sort_by(f64::total_cmp);
+        angles.push(angles[0] + 360.0);
+        let widest = angles.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+        assert!(
+            widest <= 20.0,
+            "{cell:?}: a gap of {widest:.0}° round the lake"
+        );
+        // A loop of the ring's shape: the regions 2 cells from home at most on average, where
+        // the plain cells left them 16.
+        assert!(m.location <= 2.0, "{cell:?}: {m:?}");
+    }
+}

@@ -14,6 +14,7 @@ use super::outline::{self, Prepared};
 use super::params::HexOrientation;
 use super::pins;
 use super::snake::{self, SnakeRun};
+use super::thin;
 use super::tiling::{Position, Tiling};
 use super::validity::{self, Problem};
 use super::{
@@ -232,7 +233,7 @@ fn generate_here(
         tracker.advance(unused as f64, "Snake");
         Ok((network, run))
     };
-    let lay_out = |ran: &(Network, SnakeRun), k: usize, start: &[Option<Prices>]| {
+    let lay_out = |ran: &(Network, SnakeRun), k: usize, start: Option<&RunStart>| {
         tracker.layout_work(&weights, k, jobs.len(), |report| {
             context.layout(&ran.0, &ran.1, jobs[k].1, start, report)
         })
@@ -241,7 +242,8 @@ fn generate_here(
     // become ready: a core that has finished a run lays out while the other runs go on, and no
     // run waits behind layouts (3 runs on 2 cores left a core idle for most of a run). A run's
     // other shifts assign the same moved centroids to a lattice shifted by part of a cell, so
-    // they start from its first layout's prices (see assign::Prices). Each job leaves its
+    // they start from its first layout's prices (see assign::Prices) and take its choice of
+    // figure for thin landmasses (see thin.rs). Each job leaves its
     // result in its own slot, collected in order after the scope: where and when a layout is
     // made changes nothing in it.
     type Slot<T> = Mutex<Option<Result<T, Error>>>;
@@ -254,18 +256,18 @@ fn generate_here(
     fn taken<T>(slot: Mutex<Option<T>>) -> Option<T> {
         slot.into_inner().ok().flatten()
     }
-    // Run `r`'s first layout, made from scratch; the run's other layouts and the prices that
-    // start them, unless it failed.
+    // Run `r`'s first layout, made from scratch; the run's other layouts and what starts them,
+    // unless it failed.
     let first_layout = |ran: &(Network, SnakeRun), r: usize| {
         let mut mine = (0..jobs.len()).filter(|&k| jobs[k].0 == r);
         let first = mine.next()?;
-        let laid = lay_out(ran, first, &[]);
-        let Ok((layout, prices)) = laid else {
+        let laid = lay_out(ran, first, None);
+        let Ok((layout, start)) = laid else {
             put(&layout_slots[first], laid.map(|(layout, _)| layout));
             return None;
         };
         put(&layout_slots[first], Ok(layout));
-        Some((mine.collect::<Vec<usize>>(), Arc::new(prices)))
+        Some((mine.collect::<Vec<usize>>(), Arc::new(start)))
     };
     let (snake_run, lay_out, first_layout) = (&snake_run, &lay_out, &first_layout);
     let (ran_slots_ref, layout_slots_ref) = (&ran_slots, &layout_slots);
@@ -276,13 +278,13 @@ fn generate_here(
                 if let Ok(ran) = &ran {
                     let ran = Arc::clone(ran);
                     scope.spawn_fifo(move |scope| {
-                        let Some((rest, prices)) = first_layout(&ran, r) else {
+                        let Some((rest, start)) = first_layout(&ran, r) else {
                             return;
                         };
                         for k in rest {
-                            let (ran, prices) = (Arc::clone(&ran), Arc::clone(&prices));
+                            let (ran, start) = (Arc::clone(&ran), Arc::clone(&start));
                             scope.spawn_fifo(move |_| {
-                                let laid = lay_out(&ran, k, &prices);
+                                let laid = lay_out(&ran, k, Some(&start));
                                 put(&layout_slots_ref[k], laid.map(|(layout, _)| layout));
                             });
                         }
@@ -919,6 +921,14 @@ impl StageWeights {
     }
 }
 
+/// What a Snake run's first layout hands on to the run's others.
+struct RunStart {
+    /// Its assignment's prices per landmass (none with groups).
+    prices: Vec<Option<Prices>>,
+    /// Its thin landmasses drawn again, when it kept them so (thin.rs).
+    redrawn: Option<thin::Redrawn>,
+}
+
 /// One candidate layout, in the sorted region order.
 struct Layout {
     lattice: Lattice,
@@ -1009,17 +1019,17 @@ struct Context<'a> {
 
 impl Context<'_> {
     /// Lattice, assignment and metrics for one Snake run and one origin shift (§6), before
-    /// refinement, with the assignment's prices per landmass (none with groups); `start` holds
-    /// those of a layout of the same run, if any. [`Error::Cancelled`] once `report` returns
-    /// false.
+    /// refinement, with what starts the run's other layouts; `start` is what the run's first
+    /// layout handed on (`None`: this is the first). [`Error::Cancelled`] once `report`
+    /// returns false.
     fn layout(
         &self,
         network: &Network,
         run: &SnakeRun,
         shift: [f64; 2],
-        start: &[Option<Prices>],
+        start: Option<&RunStart>,
         report: &(dyn Fn(Stage, f64) -> bool + Sync),
-    ) -> Result<(Layout, Vec<Option<Prices>>), Error> {
+    ) -> Result<(Layout, RunStart), Error> {
         let m = network.centroids;
         let mut moved: Cow<[Coord<f64>]> = Cow::Borrowed(&run.positions[..m]);
         let mut moved_outline = outline::polygons_of(&network.outline_rings(&run.positions));
@@ -1038,7 +1048,7 @@ impl Context<'_> {
         }
         let wanted: usize = demands.iter().sum();
         let tiling = Tiling::of(self.params);
-        let mut lattice = if self.pins.is_empty() {
+        let lattice = if self.pins.is_empty() {
             grid::frame(&moved_outline, wanted, shift, tiling)
         } else {
             let pinned: Vec<(Position, Coord<f64>)> =
@@ -1050,7 +1060,6 @@ impl Context<'_> {
             moved_outline = geo::MapCoords::map_coords(&moved_outline, |c| warp.at(c));
             lattice
         };
-        let moved: &[Coord<f64>] = &moved;
         // One multipolygon per part of the outline: polygons_of keeps the parts' order.
         let parts: Vec<MultiPolygon<f64>> = (moved_outline.0.iter())
             .map(|p| MultiPolygon(vec![p.clone()]))
@@ -1064,22 +1073,108 @@ impl Context<'_> {
                 part: self.blocks.landmass[self.blocks.of[i]],
             })
             .collect();
-        let selection = landmass::select(
-            &lattice,
-            &parts,
-            &demands,
-            self.params.refine_cell_ratio,
-            &fixed,
-        );
+        let select = |parts: &[MultiPolygon<f64>]| {
+            let selection = landmass::select(
+                &lattice,
+                parts,
+                &demands,
+                self.params.refine_cell_ratio,
+                &fixed,
+            );
+            if selection.assigned != wanted {
+                return Err(Error::Internal(format!(
+                    "the lattice has {} cells for {wanted}",
+                    selection.assigned
+                )));
+            }
+            Ok(selection)
+        };
+        type Report<'r> = dyn Fn(Stage, f64) -> bool + Sync + 'r;
+        let lay = |figure: &[MultiPolygon<f64>], points: &[Coord<f64>], report: &Report| {
+            let prices = start.map_or(&[][..], |start| &start.prices[..]);
+            let selection = select(figure)?;
+            self.laid_out(
+                lattice.clone(),
+                selection,
+                points,
+                &moved_outline,
+                prices,
+                report,
+            )
+        };
+        let (layout, prices, redrawn) = match start {
+            // A later layout's hand-on is not read: it carries no figure.
+            Some(RunStart {
+                redrawn: Some(redrawn),
+                ..
+            }) => {
+                let (layout, prices) = lay(&redrawn.parts, &redrawn.points, report)?;
+                (layout, prices, None)
+            }
+            Some(_) => {
+                let (layout, prices) = lay(&parts, &moved, report)?;
+                (layout, prices, None)
+            }
+            None => {
+                // The run's first layout decides for the run whether its thin landmasses are
+                // drawn again: the figure depends on the moved outline and the cell size, which
+                // the shifts share, and trying both at every shift doubled a thin layer's time.
+                let selection = select(&parts)?;
+                let assigned = &selection.cells[..selection.assigned];
+                let redrawn =
+                    thin::redrawn(&lattice, assigned, &parts, &moved, &self.prepared.part_of);
+                let (plain, prices) = self.laid_out(
+                    lattice.clone(),
+                    selection,
+                    &moved,
+                    &moved_outline,
+                    &[],
+                    report,
+                )?;
+                match redrawn {
+                    // Its work is not in the progress shares, which the plain layout has taken.
+                    Some(redrawn) => {
+                        let silent = |stage: Stage, _: f64| report(stage, 0.0);
+                        let (thick, thick_prices) = lay(&redrawn.parts, &redrawn.points, &silent)?;
+                        // Kept only where the plain cells failed the landmass: where they make
+                        // a strip's shorter stretch, the fit puts its regions near home, and
+                        // the thicker figure only turns their neighbours (thin.rs).
+                        if thick.metrics.location < thin::GAIN * plain.metrics.location {
+                            (thick, thick_prices, Some(redrawn))
+                        } else {
+                            (plain, prices, None)
+                        }
+                    }
+                    None => (plain, prices, None),
+                }
+            }
+        };
+        Ok((layout, RunStart { prices, redrawn }))
+    }
+
+    /// The regions (moved centroids `moved`) assigned among the cells `selection` holds on
+    /// `lattice` for the landmasses of `moved_outline`, each landmass's block settled where §8
+    /// measures it from, and scored; with the assignment's prices per landmass (none with
+    /// groups).
+    fn laid_out(
+        &self,
+        mut lattice: Lattice,
+        selection: landmass::Selection,
+        moved: &[Coord<f64>],
+        moved_outline: &MultiPolygon<f64>,
+        start: &[Option<Prices>],
+        report: &(dyn Fn(Stage, f64) -> bool + Sync),
+    ) -> Result<(Layout, Vec<Option<Prices>>), Error> {
+        let gap = self.grouped && self.params.group_gap > 0;
         lattice.cells = selection.cells;
         if !self.pins.is_empty() {
-            pins::bridge(&mut lattice.cells, fixed.len(), selection.assigned, tiling);
-        }
-        if selection.assigned != wanted {
-            return Err(Error::Internal(format!(
-                "the lattice has {} cells for {wanted}",
-                selection.assigned
-            )));
+            let tiling = lattice.tiling;
+            pins::bridge(
+                &mut lattice.cells,
+                self.pins.len(),
+                selection.assigned,
+                tiling,
+            );
         }
         let (cells, prices) = if self.grouped {
             if !gap {
@@ -1094,7 +1189,7 @@ impl Context<'_> {
             .ok_or(Error::Cancelled)?;
             (cells, Vec::new())
         } else {
-            self.assign(&mut lattice, moved, parts.len(), start, report)?
+            self.assign(&mut lattice, moved, moved_outline.0.len(), start, report)?
         };
         let area = &self.prepared.area_centroids;
         let misplaced = |region: usize, p: Coord<f64>| self.home.misplaced(region, p);
@@ -1115,7 +1210,7 @@ impl Context<'_> {
             let blocks_pinned = anchored(&|i| self.blocks.of[i]);
             groups::dock(&mut lattice, &self.blocks, area, gap, &blocks_pinned);
         }
-        let layout = self.scored(lattice, cells, moved_outline, moved.to_vec());
+        let layout = self.scored(lattice, cells, moved_outline.clone(), moved.to_vec());
         Ok((layout, prices))
     }
 

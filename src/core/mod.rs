@@ -33,6 +33,7 @@ mod rank;
 mod refine;
 mod score;
 mod snake;
+mod thin;
 pub mod tiling;
 mod validity;
 
