@@ -216,12 +216,12 @@ impl RingIndex {
         crossings % 2 == 1
     }
 
-    /// Distance from `p` to the nearest segment, skipping those `skip` rejects.
-    pub fn distance(&self, p: Coord<f64>, skip: impl Fn(&Segment) -> bool) -> f64 {
-        self.tree
-            .nearest_neighbor_iter_with_distance_2(&[p.x, p.y])
-            .find(|(s, _)| !skip(s))
-            .map_or(f64::INFINITY, |(_, d2)| d2.sqrt())
+    /// Distance from `p` to the nearest segment. rstar's plain nearest-neighbour search: its
+    /// iterator, which can go on to the next nearest, builds a heap of every node that might
+    /// hold the answer, and from the middle of a ring (a lake's centre) that is every node of
+    /// the ring (two concentric rings of 300 regions: 35 s, nine tenths of it in that heap).
+    pub fn distance(&self, p: Coord<f64>) -> f64 {
+        self.nearest(p).map_or(f64::INFINITY, |(_, d)| d)
     }
 
     /// Like [`RingIndex::distance`], but only up to `reach`: the distance when it is below
@@ -315,7 +315,7 @@ mod tests {
         let index = RingIndex::new(&[square(0.0, 0.0, 10.0), square(4.0, 4.0, 2.0)]);
         // (1, 5): 1 from the outer ring's left side, 3 from the hole's left side (hand count).
         let p = Coord { x: 1.0, y: 5.0 };
-        assert_eq!(index.distance(p, |_| false), 1.0);
+        assert_eq!(index.distance(p), 1.0);
         assert_eq!(index.distance_within(p, 5.0, |_| false), 1.0);
         assert_eq!(index.distance_within(p, 0.5, |_| false), 0.5);
         // Skipping the outer ring leaves the hole.
@@ -350,8 +350,7 @@ mod tests {
     #[test]
     fn distance_and_self_intersection() {
         let index = RingIndex::new(&[square(0.0, 0.0, 10.0)]);
-        assert!((index.distance(Coord { x: 3.0, y: 1.0 }, |_| false) - 1.0).abs() < 1e-12);
-        assert!((index.distance(Coord { x: 3.0, y: 1.0 }, |s| s.index == 0) - 3.0).abs() < 1e-12);
+        assert!((index.distance(Coord { x: 3.0, y: 1.0 }) - 1.0).abs() < 1e-12);
         assert!(!index.self_intersects());
         let bowtie = vec![
             Coord { x: 0.0, y: 0.0 },

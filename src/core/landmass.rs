@@ -443,6 +443,13 @@ pub fn keeps_landmasses_apart(tiling: Tiling) -> bool {
     tiling != Tiling::Square
 }
 
+/// The most region placements [`settle`] weighs for one block's shifts before it searches them
+/// on a coarser grid: nearly three times what any of 260 layers needed (37,125: the 27 regions
+/// of Alaska in Highcharts' US counties, 25 cells from their place). Two concentric rings
+/// thinner than a cell, whose first layouts put a 300-region block 33 cells off, needed a
+/// million per round (BENCHMARKS.md, "A thin landmass that closes on itself").
+const SHIFT_WORK: usize = 100_000;
+
 /// Rounds of [`settle`]. Every shift lowers the blocks' cost, so the rounds end by themselves;
 /// two or three do, and the cap only bounds the work.
 const SETTLE_ROUNDS: usize = 8;
@@ -742,21 +749,46 @@ impl Block<'_> {
         let better = |key: &(usize, f64)| {
             key.0 < staying.0 || (key.0 == staying.0 && key.1 < staying.1 - 1e-9)
         };
-        let mut shifts: Vec<((usize, f64), Position)> = Vec::new();
-        for dv in span(ideal.1) {
-            for du in span(ideal.0) {
-                let key = cost((du, dv));
-                if better(&key) {
-                    shifts.push((key, (du, dv)));
-                }
-            }
-        }
-        shifts.sort_by(|a, b| {
+        let order = |a: &((usize, f64), Position), b: &((usize, f64), Position)| {
             (a.0 .0.cmp(&b.0 .0))
                 .then(a.0 .1.total_cmp(&b.0 .1))
                 .then(a.1 .1.cmp(&b.1 .1))
                 .then(a.1 .0.cmp(&b.1 .0))
-        });
+        };
+        let (columns, rows) = (span(ideal.0), span(ideal.1));
+        // Every shift of the square costs a pass over the block's regions. A block of many
+        // regions far from its place is searched on a coarser grid first, then every shift
+        // around the best of it.
+        let work = regions.len() * columns.clone().count() * rows.clone().count();
+        let stride = ((work as f64 / SHIFT_WORK as f64).sqrt().ceil() as usize).max(1);
+        let mut shifts: Vec<((usize, f64), Position)> = Vec::new();
+        let mut tried: FxHashSet<Position> = FxHashSet::default();
+        let mut consider = |shift: Position, shifts: &mut Vec<_>| {
+            if tried.insert(shift) {
+                let key = cost(shift);
+                if better(&key) {
+                    shifts.push((key, shift));
+                }
+            }
+        };
+        for dv in rows.step_by(stride) {
+            for du in columns.clone().step_by(stride) {
+                consider((du, dv), &mut shifts);
+            }
+        }
+        if let Some(&(_, (u, v))) = shifts
+            .iter()
+            .min_by(|a, b| order(a, b))
+            .filter(|_| stride > 1)
+        {
+            let near = stride as i32 - 1;
+            for dv in v - near..=v + near {
+                for du in u - near..=u + near {
+                    consider((du, dv), &mut shifts);
+                }
+            }
+        }
+        shifts.sort_by(order);
         let block: Vec<Position> = (board.members.iter())
             .map(|&k| (lattice.cells[k].col, lattice.cells[k].row))
             .collect();
@@ -871,10 +903,10 @@ mod tests {
                 let expected = if indexes[part].contains(p) {
                     (0.0, false)
                 } else {
-                    let own = indexes[part].distance(p, |_| false);
+                    let own = indexes[part].distance(p);
                     let other = (0..parts.len())
                         .filter(|&q| q != part)
-                        .map(|q| indexes[q].distance(p, |_| false))
+                        .map(|q| indexes[q].distance(p))
                         .fold(f64::INFINITY, f64::min);
                     (own, all.contains(p) || other < own)
                 };

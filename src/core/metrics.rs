@@ -150,7 +150,7 @@ impl Landmasses {
     fn distance(&self, k: usize, p: Coord<f64>) -> f64 {
         match &self.parts[k] {
             Some(part) if part.contains(p) => 0.0,
-            Some(part) => part.distance(p, |_| false),
+            Some(part) => part.distance(p),
             None => f64::INFINITY,
         }
     }

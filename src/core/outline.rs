@@ -311,7 +311,7 @@ fn parts_holding(rings: &[Ring], points: &[Coord<f64>]) -> Vec<usize> {
                 .unwrap_or_else(|| {
                     (0..parts)
                         .min_by(|&a, &b| {
-                            let d = |k: usize| indexes[k].distance(p, |_| false);
+                            let d = |k: usize| indexes[k].distance(p);
                             d(a).total_cmp(&d(b)).then(a.cmp(&b))
                         })
                         .unwrap_or(0)
@@ -372,7 +372,7 @@ fn landmasses(
             held.unwrap_or_else(|| {
                 (0..area.len())
                     .min_by(|&a, &b| {
-                        let d = |k: usize| index(k).distance(centroid, |_| false);
+                        let d = |k: usize| index(k).distance(centroid);
                         d(a).total_cmp(&d(b)).then(a.cmp(&b))
                     })
                     .unwrap_or(0)
