@@ -383,6 +383,32 @@ fn a_river_narrower_than_a_cell_puts_no_district_on_the_wrong_bank() {
     }
 }
 
+/// Squares, pointy hexagons and flat hexagons.
+const TILINGS: [(CellShape, HexOrientation); 3] = [
+    (CellShape::Square, HexOrientation::Pointy),
+    (CellShape::Hex, HexOrientation::Pointy),
+    (CellShape::Hex, HexOrientation::Flat),
+];
+
+/// `regions` laid out with the defaults in each of `tilings`, each map checked valid.
+fn in_each_tiling(
+    regions: &[Region],
+    tilings: &[(CellShape, HexOrientation)],
+) -> Vec<((CellShape, HexOrientation), GridMap)> {
+    (tilings.iter())
+        .map(|&(cell, hex_orientation)| {
+            let params = Params {
+                cell,
+                hex_orientation,
+                ..Params::default()
+            };
+            let map = run(regions, &params);
+            common::assert_valid_grid(regions, &map);
+            ((cell, hex_orientation), map)
+        })
+        .collect()
+}
+
 /// A long thin country (Chile, Norway, Vietnam) of `count` regions: a strip tilted 15° and 0.7
 /// cells wide (`count` cells of area 0.49 in a strip 0.49 wide and `count` long), cut across
 /// at uneven places and slants.
@@ -427,18 +453,7 @@ fn a_country_thinner_than_a_cell_stays_one_piece() {
     // pieces as squares (the generated strip of scripts/make-test-layers.py: 14 as squares, 7
     // as pointy hexagons).
     let regions = thin_country(40);
-    for (cell, orientation) in [
-        (CellShape::Square, HexOrientation::Pointy),
-        (CellShape::Hex, HexOrientation::Pointy),
-        (CellShape::Hex, HexOrientation::Flat),
-    ] {
-        let params = Params {
-            cell,
-            hex_orientation: orientation,
-            ..Params::default()
-        };
-        let map = run(&regions, &params);
-        common::assert_valid_grid(&regions, &map);
+    for ((cell, orientation), map) in in_each_tiling(&regions, &TILINGS) {
         let m = map.metrics;
         assert_eq!(
             (m.pieces, m.holes),
@@ -524,17 +539,7 @@ fn a_ring_thinner_than_a_cell_closes_round_its_lake() {
     // scripts/make-test-layers.py ring 300 0.7 1: 31 cells). Drawn smaller and thicker for its
     // cells (thin.rs), it takes a closed loop (0.65 cells).
     let regions = thin_ring(150);
-    for (cell, orientation) in [
-        (CellShape::Square, HexOrientation::Pointy),
-        (CellShape::Hex, HexOrientation::Pointy),
-    ] {
-        let params = Params {
-            cell,
-            hex_orientation: orientation,
-            ..Params::default()
-        };
-        let map = run(&regions, &params);
-        common::assert_valid_grid(&regions, &map);
+    for ((cell, _), map) in in_each_tiling(&regions, &TILINGS[..2]) {
         let m = map.metrics;
         assert_eq!(m.pieces, 1, "{cell:?}: {m:?}");
         // The cells go all the way round: seen from their mean, no direction is without a

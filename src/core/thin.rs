@@ -97,7 +97,8 @@ pub fn redrawn(
 }
 
 /// Per part, whether it is thin: every cell it took came from its own outline (it offered more
-/// than the part needs; a landmass smaller than its cells takes free cells beside it instead),
+/// than the part needs; a landmass smaller than its cells takes free cells beside it instead,
+/// and a pinned cell is the user's, not the outline's),
 /// and yet more than [`UNREACHED_SHARE`] of its regions have none of them within [`REACH`]
 /// steps of their moved centroid.
 fn thin_parts(
