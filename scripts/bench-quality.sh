@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Quality of the layouts, measured by the shared judge (../shared/eval/gridmap_eval.py, the
 # reference implementation of method.md §8), on every shared layer and on generated ones (random
-# Voronoi layers, islands, a river-like gap, an archipelago, a thin country;
+# Voronoi layers, islands, a river-like gap, an archipelago, a thin country, a thin ring;
 # scripts/make-test-layers.py), through the command line with the defaults, with -refine false,
 # in hexagons and (us_counties) grouped by state; writes QUALITY.md with every metric in one
 # table and the reference figures of other tools beside them. Re-run it before any stop that
