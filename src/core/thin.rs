@@ -30,9 +30,16 @@ const REACH: i32 = 3;
 /// The share of a landmass's regions beyond reach of its cells from which the landmass is drawn
 /// again. In every square layout of the shared layers, the generated ones and Highcharts' 210
 /// maps, it is passed by rings and strips thinner than a cell (a quarter to half their regions),
-/// a 27-region landmass of Highcharts' US counties and a 3-region one of the Bahamas; only the
-/// rings' redrawn layouts are kept ([`GAIN`]).
+/// Alaska in Highcharts' US counties (which [`ROOM`] leaves out) and a 3-region landmass of the
+/// Bahamas; only the rings' redrawn layouts are kept ([`GAIN`]).
 const UNREACHED_SHARE: f64 = 0.25;
+
+/// The most room, in its regions' cells, a thin landmass's outline holds: a ring or a strip
+/// alone on its layer holds exactly its cells. One that holds far more (Alaska in Highcharts' US
+/// counties: 31 times its 27 regions' cells) is a large sparse landmass, whose budget takes a
+/// compact block of it; drawing it again cost that layer a sixth of its time, and its layout
+/// was not kept.
+const ROOM: f64 = 2.0;
 
 /// How much nearer home a layout on the redrawn landmass must put the regions (§8's C_location)
 /// to be kept: the redrawn figure is thicker than the landmass, which turns its neighbours.
@@ -70,7 +77,7 @@ pub fn redrawn(
     points: &[Coord<f64>],
     part_of: &[usize],
 ) -> Option<Redrawn> {
-    let thin = thin_parts(lattice, assigned, parts.len(), points, part_of);
+    let thin = thin_parts(lattice, assigned, parts, points, part_of);
     if !thin.contains(&true) {
         return None;
     }
@@ -96,18 +103,20 @@ pub fn redrawn(
     drawn_in.then_some(redrawn)
 }
 
-/// Per part, whether it is thin: every cell it took came from its own outline (it offered more
-/// than the part needs; a landmass smaller than its cells takes free cells beside it instead,
-/// and a pinned cell is the user's, not the outline's),
+/// Per part, whether it is thin: its outline holds no more than [`ROOM`] times its regions'
+/// cells, every cell it took came from its own outline (it offered more than the part needs; a
+/// landmass smaller than its cells takes free cells beside it instead, and a pinned cell is the
+/// user's, not the outline's),
 /// and yet more than [`UNREACHED_SHARE`] of its regions have none of them within [`REACH`]
 /// steps of their moved centroid.
 fn thin_parts(
     lattice: &Lattice,
     assigned: &[LatticeCell],
-    parts: usize,
+    figures: &[MultiPolygon<f64>],
     points: &[Coord<f64>],
     part_of: &[usize],
 ) -> Vec<bool> {
+    let parts = figures.len();
     let mut offered = vec![true; parts];
     for cell in assigned {
         offered[cell.part] &= cell.score > 0.0;
@@ -130,8 +139,13 @@ fn thin_parts(
             unreached[part] += 1;
         }
     }
+    let cell_area = lattice.cell_size * lattice.cell_size;
     (0..parts)
-        .map(|p| offered[p] && unreached[p] as f64 > UNREACHED_SHARE * regions[p] as f64)
+        .map(|p| {
+            offered[p]
+                && unreached[p] as f64 > UNREACHED_SHARE * regions[p] as f64
+                && figures[p].unsigned_area() <= ROOM * regions[p] as f64 * cell_area
+        })
         .collect()
 }
 
@@ -217,10 +231,34 @@ mod tests {
             .filter(|c| lattice.centre(c.col, c.row).y > 0.0)
             .copied()
             .collect();
-        assert_eq!(thin_parts(&lattice, &north, 1, &points, &part_of), [true]);
+        assert_eq!(
+            thin_parts(
+                &lattice,
+                &north,
+                std::slice::from_ref(&outline),
+                &points,
+                &part_of
+            ),
+            [true]
+        );
         // Cells all round it (more than its regions, which does not matter here).
         assert_eq!(
-            thin_parts(&lattice, &offered, 1, &points, &part_of),
+            thin_parts(
+                &lattice,
+                &offered,
+                std::slice::from_ref(&outline),
+                &points,
+                &part_of
+            ),
+            [false]
+        );
+        // A third of the regions on the same ring: its outline holds three times their cells,
+        // a sparse landmass rather than a thin one.
+        let sparse: Vec<Coord<f64>> = points.iter().step_by(3).copied().collect();
+        let one_part = vec![0; sparse.len()];
+        let outlines = std::slice::from_ref(&outline);
+        assert_eq!(
+            thin_parts(&lattice, &north, outlines, &sparse, &one_part),
             [false]
         );
         // Cells that are not the outline's own (a landmass smaller than its cells took free
@@ -228,7 +266,16 @@ mod tests {
         let beside: Vec<LatticeCell> = (north.iter())
             .map(|c| LatticeCell { score: 0.0, ..*c })
             .collect();
-        assert_eq!(thin_parts(&lattice, &beside, 1, &points, &part_of), [false]);
+        assert_eq!(
+            thin_parts(
+                &lattice,
+                &beside,
+                std::slice::from_ref(&outline),
+                &points,
+                &part_of
+            ),
+            [false]
+        );
     }
 
     #[test]
