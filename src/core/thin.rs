@@ -77,13 +77,13 @@ pub fn redrawn(
     points: &[Coord<f64>],
     part_of: &[usize],
 ) -> Option<Redrawn> {
-    let thin = thin_parts(lattice, assigned, parts, points, part_of);
-    if !thin.contains(&true) {
-        return None;
-    }
     let mut regions = vec![0usize; parts.len()];
     for &p in part_of {
         regions[p] += 1;
+    }
+    let thin = thin_parts(lattice, assigned, parts, &regions, points, part_of);
+    if !thin.contains(&true) {
+        return None;
     }
     let mut redrawn = Redrawn {
         parts: parts.to_vec(),
@@ -113,6 +113,7 @@ fn thin_parts(
     lattice: &Lattice,
     assigned: &[LatticeCell],
     figures: &[MultiPolygon<f64>],
+    regions: &[usize],
     points: &[Coord<f64>],
     part_of: &[usize],
 ) -> Vec<bool> {
@@ -125,16 +126,13 @@ fn thin_parts(
         .map(|c| ((c.col, c.row), c.part))
         .collect();
     let tiling = lattice.tiling;
-    let mut regions = vec![0usize; parts];
     let mut unreached = vec![0usize; parts];
     for (&point, &part) in points.iter().zip(part_of) {
-        regions[part] += 1;
         let at = lattice.position_of(point);
-        let near = (-REACH..=REACH)
+        let mut near = (-REACH..=REACH)
             .flat_map(|dc| (-REACH..=REACH).map(move |dr| (at.0 + dc, at.1 + dr)))
             .filter(|&q| tiling.distance(at, q) <= REACH);
-        let reached =
-            held.contains(&(at, part)) || near.into_iter().any(|q| held.contains(&(q, part)));
+        let reached = held.contains(&(at, part)) || near.any(|q| held.contains(&(q, part)));
         if !reached {
             unreached[part] += 1;
         }
@@ -236,6 +234,7 @@ mod tests {
                 &lattice,
                 &north,
                 std::slice::from_ref(&outline),
+                &[points.len()],
                 &points,
                 &part_of
             ),
@@ -247,6 +246,7 @@ mod tests {
                 &lattice,
                 &offered,
                 std::slice::from_ref(&outline),
+                &[points.len()],
                 &points,
                 &part_of
             ),
@@ -258,7 +258,14 @@ mod tests {
         let one_part = vec![0; sparse.len()];
         let outlines = std::slice::from_ref(&outline);
         assert_eq!(
-            thin_parts(&lattice, &north, outlines, &sparse, &one_part),
+            thin_parts(
+                &lattice,
+                &north,
+                outlines,
+                &[sparse.len()],
+                &sparse,
+                &one_part
+            ),
             [false]
         );
         // Cells that are not the outline's own (a landmass smaller than its cells took free
@@ -271,6 +278,7 @@ mod tests {
                 &lattice,
                 &beside,
                 std::slice::from_ref(&outline),
+                &[points.len()],
                 &points,
                 &part_of
             ),
