@@ -762,16 +762,21 @@ impl Block<'_> {
         let work = regions.len() * columns.clone().count() * rows.clone().count();
         let stride = ((work as f64 / SHIFT_WORK as f64).sqrt().ceil() as usize).max(1);
         let mut shifts: Vec<((usize, f64), Position)> = Vec::new();
-        let mut tried: FxHashSet<Position> = FxHashSet::default();
-        let mut consider = |shift: Position, shifts: &mut Vec<_>| {
-            if tried.insert(shift) {
-                let key = cost(shift);
-                if better(&key) {
-                    shifts.push((key, shift));
-                }
+        let consider = |shift: Position, shifts: &mut Vec<_>| {
+            let key = cost(shift);
+            if better(&key) {
+                shifts.push((key, shift));
             }
         };
-        for dv in rows.step_by(stride) {
+        // The coarse grid's shifts: every `stride`-th of the square's, from its first.
+        let on_grid = |(du, dv): Position| {
+            let step = stride as i32;
+            columns.contains(&du)
+                && rows.contains(&dv)
+                && (du - columns.start()) % step == 0
+                && (dv - rows.start()) % step == 0
+        };
+        for dv in rows.clone().step_by(stride) {
             for du in columns.clone().step_by(stride) {
                 consider((du, dv), &mut shifts);
             }
@@ -783,7 +788,7 @@ impl Block<'_> {
         {
             let near = stride as i32 - 1;
             for dv in v - near..=v + near {
-                for du in u - near..=u + near {
+                for du in (u - near..=u + near).filter(|&du| !on_grid((du, dv))) {
                     consider((du, dv), &mut shifts);
                 }
             }
