@@ -649,6 +649,8 @@ fn us_states_end_to_end() {
             "summary lacks {needle:?}: {summary}"
         );
     }
+    // The states enclose no lake, so the summary names none.
+    assert!(!summary.contains("the regions' holes"), "{summary}");
     let progress = stderr(&output);
     assert!(
         progress.starts_with("0...10...20...30...40...50...60...70...80...90...100 - done."),
@@ -1267,6 +1269,51 @@ fn regions_drawn_across_the_antimeridian_are_one_country_not_the_world() {
     assert!(summary.contains("C_adjacent 1.000"), "{summary}");
     let (_, rows) = read_rows(&dst);
     assert_eq!(assert_grid(&rows, "code").len(), 9);
+}
+
+#[test]
+fn a_ring_round_a_lake_keeps_its_lake_and_the_summary_says_whose_it_is() {
+    // Eight 1 km squares round a square lake of the same size: §8 counts holes in enclosed
+    // positions, so the summary gives the lake's area in the same cells beside them.
+    let scratch = Scratch::new("lake");
+    let src = scratch.path("lake.gpkg");
+    let square = |col: i32, row: i32| {
+        let (x, y) = (1000.0 * f64::from(col), 1000.0 * f64::from(row));
+        let ring = [
+            (0.0, 0.0),
+            (1000.0, 0.0),
+            (1000.0, 1000.0),
+            (0.0, 1000.0),
+            (0.0, 0.0),
+        ];
+        let ring: Vec<String> = (ring.iter())
+            .map(|(dx, dy)| format!("{} {}", x + dx, y + dy))
+            .collect();
+        format!("POLYGON(({}))", ring.join(","))
+    };
+    let rows: Vec<(String, String)> = (0..9)
+        .filter(|&k| k != 4)
+        .map(|k| (format!("r{k}"), square(k % 3, k / 3)))
+        .collect();
+    let rows: Vec<(&str, Option<&str>)> = (rows.iter())
+        .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))
+        .collect();
+    write_layer(&src, "regions", 3857, &rows);
+    let dst = scratch.path("grid.gpkg");
+    let output = snakegrid(["-id", "code", p(&dst), p(&src)]);
+    assert_success(&output);
+    let summary = stdout(&output);
+    // One lake of one square, and cells the size of the squares (eight regions on eight
+    // squares' area): a hand count. The layout that reproduces the squares keeps the lake, all
+    // 8 rook pairs and every region's place; ranking its one hole a defect chose one that
+    // filled the lake in instead.
+    for needle in [
+        "1 hole(s) (the regions' holes: 1 cells)",
+        "C_adjacent 1.000 (rook 1.000",
+        "C_location 0.000 cells",
+    ] {
+        assert!(summary.contains(needle), "lacks {needle:?}: {summary}");
+    }
 }
 
 #[test]

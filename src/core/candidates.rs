@@ -350,10 +350,10 @@ fn generate_here(
 }
 
 /// The layouts' indices, best first, and their TOPSIS scores: the layout's defects first
-/// (method.md §8 and the cartographer's priorities: each landmass in one piece, no holes, no
-/// region nearer another landmass than its own), then TOPSIS over location, adjacency,
-/// orientation and shape. A region on the wrong landmass counts as one defect, like a break:
-/// across a river narrower than a cell (a city's districts either side of it), the block
+/// (method.md §8 and the cartographer's priorities: each landmass in one piece, no holes but
+/// the source's, no region nearer another landmass than its own), then TOPSIS over location,
+/// adjacency, orientation and shape. A region on the wrong landmass counts as one defect, like a
+/// break: across a river narrower than a cell (a city's districts either side of it), the block
 /// boundary cannot follow every bend, and of the candidates some put a cell across it and others
 /// not.
 fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
@@ -362,7 +362,7 @@ fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
         params.topsis_weights,
     );
     let defects =
-        |k: usize| layouts[k].breaks + layouts[k].metrics.holes as usize + layouts[k].astray;
+        |k: usize| layouts[k].breaks + stray_holes(&layouts[k].metrics) + layouts[k].astray;
     let mut ranking: Vec<usize> = (0..layouts.len()).collect();
     ranking.sort_by(|&a, &b| {
         (defects(a).cmp(&defects(b)))
@@ -370,6 +370,15 @@ fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
             .then(a.cmp(&b))
     });
     (ranking, scores)
+}
+
+/// The layout's holes beyond the area of the regions' own (lakes, a missing region), in cells:
+/// §8 lets a hole the source has stay. Counted by area, not by place: a ring of regions round a
+/// lake encloses hundreds of thousands of positions (a ring of 3,000 regions), and ranking every
+/// one a defect passed over layouts that keep the lake: for eight squares round a ninth, the
+/// one that reproduces them, for one that fills the lake in.
+fn stray_holes(metrics: &LayoutMetrics) -> usize {
+    (metrics.holes as usize).saturating_sub(metrics.source_holes.round() as usize)
 }
 
 /// The regions made ready for the method: in their geometric order (`order[k]` is the input index of the

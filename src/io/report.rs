@@ -271,8 +271,16 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
         m.location_moved,
         m.shape
     );
+    // §8 counts holes in enclosed positions, so a ring of regions round a lake has thousands:
+    // the lakes' area, in the same cells, tells those the source has from defects.
+    let lakes = if m.source_holes >= 0.5 {
+        format!(" (the regions' holes: {:.0} cells)", m.source_holes)
+    } else {
+        String::new()
+    };
     text += &format!(
-        "layout: {} piece(s) (the regions: {}), {} hole(s), {} notch(es), wrong landmass {:.3}\n",
+        "layout: {} piece(s) (the regions: {}), {} hole(s){lakes}, {} notch(es), wrong landmass \
+         {:.3}\n",
         m.pieces, m.source_pieces, m.holes, m.notches, m.wrong_landmass
     );
     if let Some(g) = &map.groups {
