@@ -378,7 +378,12 @@ fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
 /// one a defect passed over layouts that keep the lake: for eight squares round a ninth, the
 /// one that reproduces them, for one that fills the lake in.
 fn stray_holes(metrics: &LayoutMetrics) -> usize {
-    (metrics.holes as usize).saturating_sub(metrics.source_holes.round() as usize)
+    metrics.holes.saturating_sub(lakes(metrics)) as usize
+}
+
+/// The regions' own holes, in whole cells of the layout: how many of its holes are the source's.
+fn lakes(metrics: &LayoutMetrics) -> u32 {
+    metrics.source_holes.round() as u32
 }
 
 /// The regions made ready for the method: in their geometric order (`order[k]` is the input index of the
@@ -1230,7 +1235,8 @@ impl Context<'_> {
         seed: u64,
         report: &(dyn Fn(Stage, f64) -> bool + Sync),
     ) -> Result<Layout, Error> {
-        let cells = self.refine(&layout.lattice, &layout.cells, seed, report)?;
+        let lakes = lakes(&layout.metrics);
+        let cells = self.refine(&layout.lattice, &layout.cells, lakes, seed, report)?;
         Ok(self.scored(layout.lattice, cells, layout.moved_outline, layout.moved))
     }
 
@@ -1317,11 +1323,12 @@ impl Context<'_> {
 
     /// The refinement (§6b) of `cells` on `lattice`, towards where §8 will measure each region
     /// from: its area centroid, taken into the lattice's frame by the scale-and-shift fit of
-    /// `cells`.
+    /// `cells`; up to `lakes` holes are the source's.
     fn refine(
         &self,
         lattice: &Lattice,
         cells: &[usize],
+        lakes: u32,
         seed: u64,
         report: &(dyn Fn(Stage, f64) -> bool + Sync),
     ) -> Result<Vec<usize>, Error> {
@@ -1365,6 +1372,7 @@ impl Context<'_> {
             lattice,
             part_of,
             misplaced: self.home.any_counted().then_some(&misplaced),
+            lakes,
         };
         refine::refine(&layout, cells, self.params, seed, &|done| {
             report(Stage::Refining, done)
