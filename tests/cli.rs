@@ -505,11 +505,12 @@ fn a_table_without_geometry_is_refused_as_such() {
 }
 
 /// A layer "regions" in EPSG:4326 of (code, WKT) rows at `path`.
-fn write_lon_lat_layer(path: &Path, rows: &[(String, String)]) {
+/// Writes layer "regions" in EPSG:`epsg` with the (code, WKT) rows.
+fn write_regions(path: &Path, epsg: u32, rows: &[(String, String)]) {
     let rows: Vec<(&str, Option<&str>)> = (rows.iter())
         .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))
         .collect();
-    write_layer(path, "regions", 4326, &rows);
+    write_layer(path, "regions", epsg, &rows);
 }
 
 /// Writes a GeoPackage layer `name` in EPSG:`epsg` (field `code`, null when "") with the given
@@ -1255,7 +1256,7 @@ fn regions_drawn_across_the_antimeridian_are_one_country_not_the_world() {
             ));
         }
     }
-    write_lon_lat_layer(&src, &rows);
+    write_regions(&src, 4326, &rows);
     let dst = scratch.path("grid.gpkg");
     let output = snakegrid(["-id", "code", p(&dst), p(&src)]);
     assert_success(&output);
@@ -1295,10 +1296,7 @@ fn a_ring_round_a_lake_keeps_its_lake_and_the_summary_says_whose_it_is() {
         .filter(|&k| k != 4)
         .map(|k| (format!("r{k}"), square(k % 3, k / 3)))
         .collect();
-    let rows: Vec<(&str, Option<&str>)> = (rows.iter())
-        .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))
-        .collect();
-    write_layer(&src, "regions", 3857, &rows);
+    write_regions(&src, 3857, &rows);
     let dst = scratch.path("grid.gpkg");
     let output = snakegrid(["-id", "code", p(&dst), p(&src)]);
     assert_success(&output);
@@ -1494,7 +1492,7 @@ fn a_layer_round_a_pole_is_laid_out_round_the_pole() {
             ));
         }
     }
-    write_lon_lat_layer(&src, &rows);
+    write_regions(&src, 4326, &rows);
     let (dst, report) = (scratch.path("grid.gpkg"), scratch.path("grid.json"));
     let output = snakegrid(["-id", "code", "-json", p(&report), p(&dst), p(&src)]);
     assert_success(&output);
