@@ -361,8 +361,9 @@ fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
         &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
         params.topsis_weights,
     );
-    let defects =
-        |k: usize| layouts[k].breaks + stray_holes(&layouts[k].metrics) + layouts[k].astray;
+    let defects = |k: usize| {
+        layouts[k].breaks + layouts[k].metrics.stray_holes() as usize + layouts[k].astray
+    };
     let mut ranking: Vec<usize> = (0..layouts.len()).collect();
     ranking.sort_by(|&a, &b| {
         (defects(a).cmp(&defects(b)))
@@ -370,20 +371,6 @@ fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
             .then(a.cmp(&b))
     });
     (ranking, scores)
-}
-
-/// The layout's holes beyond the area of the regions' own (lakes, a missing region), in cells:
-/// §8 lets a hole the source has stay. Counted by area, not by place: a ring of regions round a
-/// lake encloses hundreds of thousands of positions (a ring of 3,000 regions), and ranking every
-/// one a defect passed over layouts that keep the lake: for eight squares round a ninth, the
-/// one that reproduces them, for one that fills the lake in.
-fn stray_holes(metrics: &LayoutMetrics) -> usize {
-    metrics.holes.saturating_sub(lakes(metrics)) as usize
-}
-
-/// The regions' own holes, in whole cells of the layout: how many of its holes are the source's.
-fn lakes(metrics: &LayoutMetrics) -> u32 {
-    metrics.source_holes.round() as u32
 }
 
 /// The regions made ready for the method: in their geometric order (`order[k]` is the input index of the
@@ -1235,7 +1222,7 @@ impl Context<'_> {
         seed: u64,
         report: &(dyn Fn(Stage, f64) -> bool + Sync),
     ) -> Result<Layout, Error> {
-        let lakes = lakes(&layout.metrics);
+        let lakes = layout.metrics.lake_cells();
         let cells = self.refine(&layout.lattice, &layout.cells, lakes, seed, report)?;
         Ok(self.scored(layout.lattice, cells, layout.moved_outline, layout.moved))
     }

@@ -1124,6 +1124,29 @@ mod tests {
     }
 
     #[test]
+    fn holes_up_to_the_regions_own_are_not_defects() {
+        // (layout's holes, regions' holes in cells) → defects among the holes, by hand.
+        for (holes, source_holes, stray) in [
+            (0, 0.0, 0),
+            (3, 0.0, 3),
+            (3, 0.4, 3),
+            (3, 1.6, 1),
+            (1, 2.0, 0),
+        ] {
+            let m = LayoutMetrics {
+                holes,
+                source_holes,
+                ..LayoutMetrics::default()
+            };
+            assert_eq!(
+                m.stray_holes(),
+                stray,
+                "{holes} holes, lakes of {source_holes} cells"
+            );
+        }
+    }
+
+    #[test]
     fn pieces_holes_and_notches_are_counted_as_by_hand() {
         // A ring around one hole, a notch in its right side, and a separate cell that touches
         // the ring only at a corner (a piece of its own: corners do not join pieces).

@@ -273,10 +273,9 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
     );
     // §8 counts holes in enclosed positions, so a ring of regions round a lake has thousands:
     // the lakes' area, in the same cells, tells those the source has from defects.
-    let lakes = if m.source_holes >= 0.5 {
-        format!(" (the regions' holes: {:.0} cells)", m.source_holes)
-    } else {
-        String::new()
+    let lakes = match m.lake_cells() {
+        0 => String::new(),
+        cells => format!(" (the regions' holes: {cells} cells)"),
     };
     text += &format!(
         "layout: {} piece(s) (the regions: {}), {} hole(s){lakes}, {} notch(es), wrong landmass \
