@@ -504,8 +504,7 @@ fn a_table_without_geometry_is_refused_as_such() {
     assert_eq!(scratch.listing(), ["table.gpkg"]);
 }
 
-/// A layer "regions" in EPSG:4326 of (code, WKT) rows at `path`.
-/// Writes layer "regions" in EPSG:`epsg` with the (code, WKT) rows.
+/// Writes layer "regions" in EPSG:`epsg` of (code, WKT) rows at `path`.
 fn write_regions(path: &Path, epsg: u32, rows: &[(String, String)]) {
     let rows: Vec<(&str, Option<&str>)> = (rows.iter())
         .map(|(id, wkt)| (id.as_str(), Some(wkt.as_str())))

@@ -1091,9 +1091,8 @@ impl Context<'_> {
             Ok(selection)
         };
         type Report<'r> = dyn Fn(Stage, f64) -> bool + Sync + 'r;
-        let lay = |figure: &[MultiPolygon<f64>], points: &[Coord<f64>], report: &Report| {
-            let prices = start.map_or(&[][..], |start| &start.prices[..]);
-            let selection = select(figure)?;
+        let prices = start.map_or(&[][..], |start| &start.prices[..]);
+        let lay = |selection, points: &[Coord<f64>], report: &Report| {
             self.laid_out(
                 lattice.clone(),
                 selection,
@@ -1104,16 +1103,13 @@ impl Context<'_> {
             )
         };
         let (layout, prices, redrawn) = match start {
-            // A later layout's hand-on is not read: it carries no figure.
-            Some(RunStart {
-                redrawn: Some(redrawn),
-                ..
-            }) => {
-                let (layout, prices) = lay(&redrawn.parts, &redrawn.points, report)?;
-                (layout, prices, None)
-            }
-            Some(_) => {
-                let (layout, prices) = lay(&parts, &moved, report)?;
+            // A later layout takes the first's figure; its own hand-on is not read.
+            Some(start) => {
+                let (figure, points) = match &start.redrawn {
+                    Some(redrawn) => (&redrawn.parts[..], &redrawn.points[..]),
+                    None => (&parts[..], &moved[..]),
+                };
+                let (layout, prices) = lay(select(figure)?, points, report)?;
                 (layout, prices, None)
             }
             None => {
@@ -1124,19 +1120,13 @@ impl Context<'_> {
                 let assigned = &selection.cells[..selection.assigned];
                 let redrawn =
                     thin::redrawn(&lattice, assigned, &parts, &moved, &self.prepared.part_of);
-                let (plain, prices) = self.laid_out(
-                    lattice.clone(),
-                    selection,
-                    &moved,
-                    &moved_outline,
-                    &[],
-                    report,
-                )?;
+                let (plain, prices) = lay(selection, &moved, report)?;
                 match redrawn {
                     // Its work is not in the progress shares, which the plain layout has taken.
                     Some(redrawn) => {
                         let silent = |stage: Stage, _: f64| report(stage, 0.0);
-                        let (thick, thick_prices) = lay(&redrawn.parts, &redrawn.points, &silent)?;
+                        let (thick, thick_prices) =
+                            lay(select(&redrawn.parts)?, &redrawn.points, &silent)?;
                         // Kept only where the plain cells failed the landmass: where they make
                         // a strip's shorter stretch, the fit puts its regions near home, and
                         // the thicker figure only turns their neighbours (thin.rs).

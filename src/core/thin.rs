@@ -129,10 +129,11 @@ fn thin_parts(
     let mut unreached = vec![0usize; parts];
     for (&point, &part) in points.iter().zip(part_of) {
         let at = lattice.position_of(point);
-        let mut near = (-REACH..=REACH)
+        // The square round `at` holds every position within reach, `at` among them.
+        let reached = (-REACH..=REACH)
             .flat_map(|dc| (-REACH..=REACH).map(move |dr| (at.0 + dc, at.1 + dr)))
-            .filter(|&q| tiling.distance(at, q) <= REACH);
-        let reached = held.contains(&(at, part)) || near.any(|q| held.contains(&(q, part)));
+            .filter(|&q| tiling.distance(at, q) <= REACH)
+            .any(|q| held.contains(&(q, part)));
         if !reached {
             unreached[part] += 1;
         }
@@ -223,67 +224,30 @@ mod tests {
         let (outline, points) = ring(300, 0.7);
         let lattice = frame(&outline, 300, [0.0, 0.0], Tiling::Square);
         let offered = lattice.scores(&outline, 0);
-        let part_of = vec![0; points.len()];
+        let outlines = std::slice::from_ref(&outline);
+        // Whether the one part is thin with these cells and these regions' moved centroids.
+        let thin = |cells: &[LatticeCell], points: &[Coord<f64>]| {
+            let part_of = vec![0; points.len()];
+            thin_parts(&lattice, cells, outlines, &[points.len()], points, &part_of)
+        };
         // The plain selection's failure: cells only over the northern half.
         let north: Vec<LatticeCell> = (offered.iter())
             .filter(|c| lattice.centre(c.col, c.row).y > 0.0)
             .copied()
             .collect();
-        assert_eq!(
-            thin_parts(
-                &lattice,
-                &north,
-                std::slice::from_ref(&outline),
-                &[points.len()],
-                &points,
-                &part_of
-            ),
-            [true]
-        );
+        assert_eq!(thin(&north, &points), [true]);
         // Cells all round it (more than its regions, which does not matter here).
-        assert_eq!(
-            thin_parts(
-                &lattice,
-                &offered,
-                std::slice::from_ref(&outline),
-                &[points.len()],
-                &points,
-                &part_of
-            ),
-            [false]
-        );
+        assert_eq!(thin(&offered, &points), [false]);
         // A third of the regions on the same ring: its outline holds three times their cells,
         // a sparse landmass rather than a thin one.
         let sparse: Vec<Coord<f64>> = points.iter().step_by(3).copied().collect();
-        let one_part = vec![0; sparse.len()];
-        let outlines = std::slice::from_ref(&outline);
-        assert_eq!(
-            thin_parts(
-                &lattice,
-                &north,
-                outlines,
-                &[sparse.len()],
-                &sparse,
-                &one_part
-            ),
-            [false]
-        );
+        assert_eq!(thin(&north, &sparse), [false]);
         // Cells that are not the outline's own (a landmass smaller than its cells took free
         // positions beside it) are never a thin landmass's.
         let beside: Vec<LatticeCell> = (north.iter())
             .map(|c| LatticeCell { score: 0.0, ..*c })
             .collect();
-        assert_eq!(
-            thin_parts(
-                &lattice,
-                &beside,
-                std::slice::from_ref(&outline),
-                &[points.len()],
-                &points,
-                &part_of
-            ),
-            [false]
-        );
+        assert_eq!(thin(&beside, &points), [false]);
     }
 
     #[test]
