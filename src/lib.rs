@@ -25,7 +25,7 @@ pub mod wkb;
 
 pub use crate::core::{crs, diagnostics, fields, hexjson, input, params, pins, tiling};
 pub use crate::core::{
-    generate, score, CandidateReport, CellLayout, Error, GridMap, GroupMetrics, HexOrientation,
-    LayoutMetrics, LoadModel, Params, Progress, Region, RegionCell, RegionMetrics, SnakeReport,
-    StopReason, PARAMETERS,
+    expected_seconds, generate, score, CandidateReport, CellLayout, Error, GridMap, GroupMetrics,
+    HexOrientation, LayoutMetrics, LoadModel, Params, Progress, Region, RegionCell, RegionMetrics,
+    SnakeReport, StopReason, PARAMETERS,
 };

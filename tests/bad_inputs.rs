@@ -192,22 +192,34 @@ fn a_cancelled_run_leaves_an_existing_destination_untouched_at_every_stage() {
         svg: Some(scratch.path("p.svg").to_string_lossy().into_owned()),
         ..job(&case, &dst)
     };
-    // From the first report (while reading) to the last one that may still cancel (writing).
-    for after in [0.0, 0.04, 0.3, 0.9, 0.95, 0.99] {
+    // At the first report of each stage, from reading to writing, and at the last report that
+    // may still cancel (writing's end).
+    let stages = [
+        "reading",
+        "checking geometry",
+        "outline",
+        "Snake step",
+        "layout",
+        "writing",
+    ];
+    for stage in stages {
         std::fs::write(&dst, before).unwrap();
-        let result = run(&job, &Params::default(), &|fraction, _| fraction <= after);
-        assert_eq!(
-            result.err(),
-            Some(Error::Cancelled),
-            "cancelled after {after}"
-        );
-        assert_eq!(
-            std::fs::read(&dst).unwrap(),
-            before,
-            "cancelled after {after}"
-        );
-        assert_eq!(scratch.listing(), ["grid.gpkg"], "cancelled after {after}");
+        let seen = std::sync::atomic::AtomicBool::new(false);
+        let result = run(&job, &Params::default(), &|_, message| {
+            let here = message.starts_with(stage);
+            seen.fetch_or(here, std::sync::atomic::Ordering::Relaxed);
+            !here
+        });
+        assert!(seen.into_inner(), "no report names {stage:?}");
+        assert_eq!(result.err(), Some(Error::Cancelled), "cancelled at {stage}");
+        assert_eq!(std::fs::read(&dst).unwrap(), before, "cancelled at {stage}");
+        assert_eq!(scratch.listing(), ["grid.gpkg"], "cancelled at {stage}");
     }
+    std::fs::write(&dst, before).unwrap();
+    let result = run(&job, &Params::default(), &|fraction, _| fraction < 1.0);
+    assert_eq!(result.err(), Some(Error::Cancelled), "cancelled at the end");
+    assert_eq!(std::fs::read(&dst).unwrap(), before, "cancelled at the end");
+    assert_eq!(scratch.listing(), ["grid.gpkg"], "cancelled at the end");
     run(&job, &Params::default(), &|_, _| true).unwrap();
     assert_ne!(std::fs::read(&dst).unwrap(), before);
     assert_eq!(scratch.listing(), ["grid.gpkg", "p.svg"]);

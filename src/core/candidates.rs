@@ -47,9 +47,10 @@ const MAX_SPAN: f64 = 1e6;
 /// from overflow (1e300 squared is infinite, and the layer would seem to have no area).
 const LARGEST_COORDINATE: f64 = 1e100;
 
-/// The share of the input's preparation that checking the geometry takes (validity at 10⁷
-/// vertices: 3.5 s of about 9 s, BENCHMARKS.md "Dense boundaries"; a little less at 10⁶).
-const CHECKING_SHARE: f64 = 0.3;
+/// The share of the input's preparation that checking the geometry takes: 0.065 s of 0.38 s on
+/// the US states at 10⁶ vertices, 0.075 s of 0.33 s on the US counties (2026-12-06,
+/// BENCHMARKS.md "Progress"; validity at 10⁷ vertices took 3.5 s of about 9 s).
+const CHECKING_SHARE: f64 = 0.2;
 
 /// The most neighbouring regions a layer's regions may have on average. Regions side by side
 /// form a planar map, whose regions have fewer than 6 neighbours on average (Euler's formula),
@@ -115,31 +116,69 @@ fn layout_jobs(runs: usize, shifts: &[[f64; 2]], count: usize) -> Vec<(usize, [f
     jobs.into_iter().map(|(r, s)| (r, shifts[s])).collect()
 }
 
+/// What a run on a layer does: the noise levels of its Snake runs (those some layout uses), its
+/// (run, shift) layouts, how many of those are refined, and how many pairs there were to choose
+/// from.
+struct Plan {
+    levels: Vec<f64>,
+    jobs: Vec<(usize, [f64; 2])>,
+    refined: usize,
+    pairs: usize,
+}
+
+impl Plan {
+    fn of(regions: usize, params: &Params) -> Plan {
+        let mut levels = params.snake_noise_levels();
+        let jobs = layout_jobs(levels.len(), &params.shifts, params.layout_count(regions));
+        // Snake runs that no layout uses are not made.
+        let pairs = levels.len() * params.shifts.len();
+        levels.truncate(jobs.iter().map(|&(r, _)| r + 1).max().unwrap_or(1));
+        let refined = if params.refine {
+            params.refined_count(regions, jobs.len())
+        } else {
+            0
+        };
+        Plan {
+            levels,
+            jobs,
+            refined,
+            pairs,
+        }
+    }
+
+    /// The layouts' work, in Snake steps ([`StageWeights`]).
+    fn layout_work(&self, params: &Params) -> f64 {
+        let weights = StageWeights::new(params);
+        (self.levels.len() * params.max_steps) as f64
+            + self.jobs.len() as f64 * weights.plain()
+            + self.refined as f64 * weights.refinement()
+    }
+}
+
+/// See [`crate::expected_seconds`].
+pub fn expected_seconds(regions: &[Region], params: &Params) -> f64 {
+    let plan = Plan::of(regions.len(), params);
+    let vertices: usize = regions.iter().map(|r| r.geometry.coords_count()).sum();
+    let steps = StageWeights::preparation(vertices, regions.len()) + plan.layout_work(params);
+    steps * StageWeights::step_seconds(regions.len())
+}
+
 /// [`generate`] on the current thread pool.
 fn generate_here(
     regions: &[Region],
     params: &Params,
     progress: Progress,
 ) -> Result<GridMap, Error> {
-    let mut levels = params.snake_noise_levels();
-    let mut jobs = layout_jobs(
-        levels.len(),
-        &params.shifts,
-        params.layout_count(regions.len()),
-    );
-    // Snake runs that no layout uses are not made.
-    let pairs = levels.len() * params.shifts.len();
-    levels.truncate(jobs.iter().map(|&(r, _)| r + 1).max().unwrap_or(1));
-    let refined = if params.refine {
-        params.refined_count(regions.len(), jobs.len())
-    } else {
-        0
-    };
-    // The bar's share of the input's preparation, which follows the vertices, not the regions.
+    let plan = Plan::of(regions.len(), params);
+    let layout_work = plan.layout_work(params);
+    let Plan {
+        levels,
+        mut jobs,
+        refined,
+        pairs,
+    } = plan;
     let weights = StageWeights::new(params);
-    let layout_work = (levels.len() * params.max_steps) as f64
-        + jobs.len() as f64 * weights.plain()
-        + refined as f64 * weights.refinement();
+    // The bar's share of the input's preparation, which follows the vertices, not the regions.
     let vertices: usize = regions.iter().map(|r| r.geometry.coords_count()).sum();
     let preparation = StageWeights::preparation(vertices, regions.len());
     let prepared_share = preparation / (preparation + layout_work);
@@ -904,11 +943,23 @@ impl StageWeights {
         }
     }
 
+    /// A Snake step's wall time per region, in seconds, as the whole run's work divides among
+    /// the cores (two): a layout stage of 1.33 s for 258 steps on the US counties, 0.13 s for
+    /// 1,818 on the US states (2026-12-06, BENCHMARKS.md "Progress").
+    const STEP_SECONDS_PER_REGION: f64 = 1.6e-6;
+
+    /// A Snake step's wall time on `regions` regions, in seconds.
+    fn step_seconds(regions: usize) -> f64 {
+        Self::STEP_SECONDS_PER_REGION * regions.max(1) as f64
+    }
+
     /// Checking and preparing an input of `vertices` vertices and `regions` regions (reading it
-    /// is the host's share): about 1 µs a vertex (us_states densified to 10⁶ vertices), in
-    /// Snake steps of about 7 µs a region.
+    /// is the host's share), in Snake steps: 0.33 µs a vertex, 13 µs a region (centroids, the
+    /// network) and 15 ms besides, fitted to the US counties and states as given and densified
+    /// to 10⁶ vertices (the same measurements).
     fn preparation(vertices: usize, regions: usize) -> f64 {
-        vertices as f64 / (7.0 * regions.max(1) as f64)
+        let seconds = 0.015 + 0.33e-6 * vertices as f64 + 13e-6 * regions as f64;
+        seconds / Self::step_seconds(regions)
     }
 
     /// A layout before refinement: assigned and scored.

@@ -389,3 +389,11 @@ impl GridMap {
 pub fn generate(regions: &[Region], params: &Params, progress: Progress) -> Result<GridMap, Error> {
     candidates::generate(regions, params, progress)
 }
+
+/// The wall time [`generate`] is expected to take on `regions`, in seconds on the two-core machine
+/// the progress model was measured on: what a host weighs its own stages (reading, writing)
+/// against, so that one progress bar follows the clock through all of them. An estimate from
+/// the vertices, the regions and the parameters, for progress only.
+pub fn expected_seconds(regions: &[Region], params: &Params) -> f64 {
+    candidates::expected_seconds(regions, params)
+}

@@ -17,9 +17,10 @@ use geo::{
 };
 use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Line, Rectangle};
-use rstar::{RTree, RTreeObject, AABB};
+use rstar::{Envelope, RTree, RTreeObject, AABB};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
+use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 use std::sync::{Mutex, PoisonError};
 
 /// When two regions' boundaries share a border: where they run within `reach` of each other for
@@ -131,7 +132,9 @@ pub fn prepare(
     let stages = SideBySide::new(reached);
     let (adjacency, (regions_union, landmass_of, simplified, joined)) = rayon::join(
         || {
-            let adjacency = adjacency(drawn, &clusters, params.point_adjacency, SHARED);
+            let adjacency = adjacency(drawn, &clusters, params.point_adjacency, SHARED, &|share| {
+                stages.advanced(Stage::Adjacency, share)
+            });
             stages.ended(Stage::Adjacency);
             adjacency
         },
@@ -155,6 +158,7 @@ pub fn prepare(
             &self::clusters(drawn, ACROSS_GAPS.reach),
             params.point_adjacency,
             ACROSS_GAPS,
+            &|_| {},
         );
         let mut all: Vec<(usize, usize)> = adjacency.iter().chain(&near).copied().collect();
         all.sort_unstable();
@@ -201,42 +205,60 @@ impl Stage {
         }
     }
 
-    /// The stage's share of the outline's work: each is a few tenths of a second at 10⁶
-    /// vertices, the adjacency the longest on us_states, the simplification on a star of
-    /// long spikes (BENCHMARKS.md "Dense boundaries").
+    /// The stage's share of the outline's work. At 10⁶ vertices the adjacency takes about as
+    /// long as the union and the simplification after it (the US states: 0.25 s against 0.25 s
+    /// and 0.05 s; the US counties: 0.23 s against 0.16 and 0.08 s); on a star of long spikes
+    /// the simplification is all of it (0.15 s, the others 0.01 s). 2026-12-06, BENCHMARKS.md
+    /// "Progress".
     fn share(self) -> f64 {
         match self {
-            Stage::Adjacency => 0.4,
-            Stage::Union | Stage::Simplification => 0.3,
+            Stage::Adjacency => 0.5,
+            Stage::Union => 0.3,
+            Stage::Simplification => 0.2,
         }
     }
 }
 
-/// Reports the outline's share done as each [`Stage`] ends, in whichever order they end, and
+/// Reports the outline's share done as the [`Stage`]s go, in whichever order they end, and
 /// names those still running.
 struct SideBySide<'r> {
     reached: &'r (dyn Fn(f64, &str) + Sync),
-    ended: Mutex<[bool; 3]>,
+    /// Per stage, the share of it done.
+    done: Mutex<[f64; 3]>,
 }
 
 impl<'r> SideBySide<'r> {
     fn new(reached: &'r (dyn Fn(f64, &str) + Sync)) -> Self {
         SideBySide {
             reached,
-            ended: Mutex::new([false; 3]),
+            done: Mutex::new([0.0; 3]),
         }
     }
 
     fn ended(&self, stage: Stage) {
+        self.advanced(stage, 1.0);
+    }
+
+    /// `stage` has done `share` of its work.
+    fn advanced(&self, stage: Stage, share: f64) {
         // Reported under the lock, so that the shares heard only grow.
-        let mut ended = self.ended.lock().unwrap_or_else(PoisonError::into_inner);
-        ended[stage as usize] = true;
-        let done: f64 = (Stage::ALL.iter().zip(ended.iter()))
-            .filter(|(_, &e)| e)
-            .map(|(s, _)| s.share())
-            .sum();
-        let running: Vec<&str> = (Stage::ALL.iter().zip(ended.iter()))
-            .filter(|(_, &e)| !e)
+        let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
+        let own = &mut done[stage as usize];
+        *own = own.max(share.clamp(0.0, 1.0));
+        // The adjacency runs beside the union and then the simplification: the outline is as
+        // far on as the side further on.
+        let side = |stages: &[Stage]| -> (f64, f64) {
+            let done = stages.iter().map(|&s| s.share() * done[s as usize]).sum();
+            (done, stages.iter().map(|s| s.share()).sum())
+        };
+        let (beside, beside_whole) = side(&[Stage::Adjacency]);
+        let (then, then_whole) = side(&[Stage::Union, Stage::Simplification]);
+        let whole = beside.max(then) / beside_whole.max(then_whole);
+        // The simplification begins as the union ends.
+        let begun =
+            |s: &Stage| !matches!(s, Stage::Simplification) || done[Stage::Union as usize] == 1.0;
+        let running: Vec<&str> = (Stage::ALL.iter().zip(done.iter()))
+            .filter(|(s, &d)| begun(s) && d < 1.0)
             .map(|(s, _)| s.name())
             .collect();
         let message = if running.is_empty() {
@@ -244,7 +266,7 @@ impl<'r> SideBySide<'r> {
         } else {
             format!("outline: {}", running.join(" and "))
         };
-        (self.reached)(0.05 + 0.9 * done, &message);
+        (self.reached)(0.05 + 0.9 * whole, &message);
     }
 }
 
@@ -417,12 +439,14 @@ impl RTreeObject for Edge {
 /// Pairs of regions whose boundaries share a line of positive length (or, with
 /// `point_adjacency`, any point). Works on the boundaries' segments so that it needs no exact
 /// noding: a segment counts as shared where another region's segment runs along it within
-/// `reach` (in cells), for a length above `least` (ditto).
+/// `reach` (in cells), for a length above `least` (ditto). `reached` hears the share of the work
+/// done as it goes, from any thread.
 fn adjacency(
     regions: &[&MultiPolygon<f64>],
     clusters: &[Vec<usize>],
     point_adjacency: bool,
     Touching { reach, least }: Touching,
+    reached: &(dyn Fn(f64) + Sync),
 ) -> Vec<(usize, usize)> {
     // A region alone in its cluster touches no other.
     let edges: Vec<Edge> = (clusters.iter().filter(|c| c.len() > 1))
@@ -439,6 +463,15 @@ fn adjacency(
                 })
         })
         .collect();
+    // The work, per edge, as measured on the US states at 10⁶ vertices (0.03 s a million
+    // edges): collecting, keying, sorting and matching every edge (1 + 1 + 2 + 1), then putting
+    // those left to search back in order and indexing them (1.5) and searching them (4). Until
+    // the matching says how many are left, all are counted; with `point_adjacency` all are
+    // searched, unmatched.
+    let all = edges.len() as f64;
+    let matching = if point_adjacency { 1.0 } else { 5.0 };
+    let share = |done: f64, left: f64| done / (matching * all + 5.5 * left);
+    reached(share(all, all));
     let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
     // Borders two regions have vertex for vertex (a topologically built layer shares every
     // inner border so) are shared along their whole length: found by sorting, not searching,
@@ -460,13 +493,15 @@ fn adjacency(
         let mut keyed: Vec<([u64; 4], usize, usize)> = (edges.par_iter().enumerate())
             .map(|(k, e)| (key(e), e.region, k))
             .collect();
+        reached(share(2.0 * all, all));
         keyed.par_sort_unstable();
+        reached(share(4.0 * all, all));
         let mut rest = Vec::new();
         for group in keyed.chunk_by(|a, b| a.0 == b.0) {
             let mut owners: Vec<usize> = group.iter().map(|g| g.1).collect();
             owners.dedup();
             if owners.len() == 1 {
-                rest.extend(group.iter().map(|g| edges[g.2]));
+                rest.extend(group.iter().map(|g| g.2));
                 continue;
             }
             let e = &edges[group[0].2];
@@ -477,14 +512,21 @@ fn adjacency(
                 }
             }
         }
-        rest
+        reached(share(5.0 * all, rest.len() as f64));
+        // Back in the boundaries' order, for the runs below.
+        rest.par_sort_unstable();
+        rest.into_iter().map(|k| edges[k]).collect()
     };
-    // Each edge with its box, which building the tree compares over and over.
+    let (left, matched) = (searched.len() as f64, matching * all);
+    let runs = edge_runs(&searched);
     let tree = RTree::bulk_load(
-        (searched.iter())
-            .map(|e| GeomWithData::new(Rectangle::from_aabb(e.envelope()), *e))
+        (runs.iter())
+            .map(|run| GeomWithData::new(Rectangle::from_aabb(run.envelope), run.edges.clone()))
             .collect(),
     );
+    reached(share(matched + 1.5 * left, left));
+    let chunks_done = AtomicUsize::new(0);
+    let chunks = searched.len().div_ceil(ADJACENCY_CHUNK).max(1) as f64;
     // In parallel over fixed chunks of edges, summed chunk by chunk in order: the same sums
     // (to the last bit) with any number of threads.
     let per_chunk: Vec<std::collections::BTreeMap<(usize, usize), f64>> = searched
@@ -498,14 +540,21 @@ fn adjacency(
                     [env.lower()[0] - t, env.lower()[1] - t],
                     [env.upper()[0] + t, env.upper()[1] + t],
                 );
-                for f in tree.locate_in_envelope_intersecting(&search) {
-                    let f = &f.data;
+                let near = (tree.locate_in_envelope_intersecting(&search))
+                    .flat_map(|run| &searched[run.data.clone()])
+                    .filter(|f| f.envelope().intersects(&search));
+                for f in near {
                     if f.region <= e.region || !touches(e, f, reach) {
                         continue;
                     }
                     *shared.entry((e.region, f.region)).or_default() += overlap(e, f, reach);
                 }
             }
+            let done = chunks_done.fetch_add(1, AtomicOrdering::Relaxed) + 1;
+            reached(share(
+                matched + left * (1.5 + 4.0 * done as f64 / chunks),
+                left,
+            ));
             shared
         })
         .collect();
@@ -549,6 +598,41 @@ fn overlap(e: &Edge, f: &Edge, reach: f64) -> f64 {
     let along = |p: Coord<f64>| (p - e.a).x * u.x + (p - e.a).y * u.y;
     let (s, t) = (along(f.a), along(f.b));
     (s.max(t).min(len) - s.min(t).max(0.0)).max(0.0)
+}
+
+/// Boundary edges in a row, under one box.
+struct EdgeRun {
+    /// The edges, as a range of the list they come from.
+    edges: std::ops::Range<usize>,
+    envelope: AABB<[f64; 2]>,
+}
+
+/// The most edges in an [`EdgeRun`]: the adjacency's tree holds runs, not edges, and is built
+/// that many times faster (the US states at 10⁶ vertices: 0.15 s for a tree of 419,352 edges),
+/// while a search meets a few more edges, each tested by its box first.
+const RUN_EDGES: usize = 8;
+
+/// `edges` (in the boundaries' order) cut into runs of up to [`RUN_EDGES`] edges of one region
+/// that follow on from each other, so that each run's box stays about as small as its edges.
+fn edge_runs(edges: &[Edge]) -> Vec<EdgeRun> {
+    let mut runs: Vec<EdgeRun> = Vec::new();
+    for (k, e) in edges.iter().enumerate() {
+        match runs.last_mut() {
+            Some(run)
+                if run.edges.len() < RUN_EDGES
+                    && edges[k - 1].region == e.region
+                    && edges[k - 1].b == e.a =>
+            {
+                run.edges.end = k + 1;
+                run.envelope.merge(&e.envelope());
+            }
+            _ => runs.push(EdgeRun {
+                edges: k..k + 1,
+                envelope: e.envelope(),
+            }),
+        }
+    }
+    runs
 }
 
 /// Groups of regions whose bounding boxes (widened by `reach`) overlap, directly or through
@@ -1363,5 +1447,62 @@ mod tests {
         assert_eq!(holes.len(), 1, "the 1-cell² lake stays, the sliver goes");
         // The island region's centroid lies in its big square; the tiny part holds no centroid.
         assert_eq!(prepared.rings.iter().filter(|r| !r.hole).count(), 2);
+    }
+
+    #[test]
+    fn edge_runs_keep_to_one_region_and_to_edges_that_follow_on() {
+        let edge = |a: (f64, f64), b: (f64, f64), region: usize| Edge {
+            a: Coord { x: a.0, y: a.1 },
+            b: Coord { x: b.0, y: b.1 },
+            region,
+        };
+        // Ten edges of region 0 in a row, then one that starts elsewhere, then two of region 1
+        // that go on from region 0's last.
+        let mut edges: Vec<Edge> = (0..10)
+            .map(|k| edge((k as f64, 0.0), (k as f64 + 1.0, 0.0), 0))
+            .collect();
+        edges.push(edge((20.0, 0.0), (21.0, 0.0), 0));
+        edges.push(edge((21.0, 0.0), (22.0, 0.0), 1));
+        edges.push(edge((22.0, 0.0), (22.0, 1.0), 1));
+        let runs = edge_runs(&edges);
+        let ranges: Vec<std::ops::Range<usize>> = runs.iter().map(|r| r.edges.clone()).collect();
+        assert_eq!(ranges, [0..RUN_EDGES, RUN_EDGES..10, 10..11, 11..13]);
+        let last = &runs[3].envelope;
+        assert_eq!((last.lower(), last.upper()), ([21.0, 0.0], [22.0, 1.0]));
+    }
+
+    #[test]
+    fn the_outline_reports_as_far_as_its_further_side_and_only_forward() {
+        let heard = Mutex::new(Vec::new());
+        let reached = |share: f64, message: &str| {
+            heard.lock().unwrap().push((share, message.to_owned()));
+        };
+        let stages = SideBySide::new(&reached);
+        stages.advanced(Stage::Adjacency, 0.5);
+        stages.advanced(Stage::Adjacency, 0.25);
+        stages.ended(Stage::Union);
+        stages.ended(Stage::Adjacency);
+        stages.ended(Stage::Simplification);
+        let heard = heard.into_inner().unwrap();
+        let shares: Vec<f64> = heard.iter().map(|(s, _)| *s).collect();
+        // Each side weighs 0.5: half the adjacency is half the outline, and a report of less
+        // changes nothing; the union is 0.6 of its side, and the adjacency's end (the side
+        // further on) all of the outline, which the simplification's end leaves there: from
+        // 0.05 to 0.95 of the bar.
+        let expected = [0.5, 0.5, 0.6, 1.0, 1.0].map(|d| 0.05 + 0.9 * d);
+        for (got, want) in shares.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-12, "{shares:?}");
+        }
+        let messages: Vec<&str> = heard.iter().map(|(_, m)| m.as_str()).collect();
+        assert_eq!(
+            messages,
+            [
+                "outline: adjacency and union",
+                "outline: adjacency and union",
+                "outline: adjacency and simplification",
+                "outline: simplification",
+                "outline",
+            ]
+        );
     }
 }

@@ -40,6 +40,7 @@ use gdal::spatial_ref::SpatialRef;
 use gdal::vector::LayerAccess;
 use gdal::vector::{Feature, Layer};
 use gdal::Driver;
+use geo::CoordsIter;
 use paths::SourceFiles;
 use session::Session;
 use staging::Staging;
@@ -63,9 +64,32 @@ pub struct Outcome {
     pub crs: Option<String>,
 }
 
-/// Share of the progress bar for reading (before) and writing (after) the layout.
-const READ_SHARE: f64 = 0.05;
-const WRITE_SHARE: f64 = 0.08;
+/// The progress bar's shares of reading (before) and writing (after) the layout: each stage's
+/// expected time against the layout's ([`crate::expected_seconds`]), so that the bar
+/// follows the clock both on dense boundaries, where starting and reading are a sixth of the run
+/// (the US states at 10⁶ vertices), and on many regions, where they are a twentieth.
+#[derive(Clone, Copy)]
+struct BarShares {
+    read: f64,
+    write: f64,
+}
+
+impl BarShares {
+    /// Starting GDAL and reading: 55 ms, 0.06 µs a vertex and 5 µs a feature; writing: 10 ms
+    /// and 12 µs a feature (the US counties and states, as given and densified to 10⁶ vertices,
+    /// BENCHMARKS.md "Progress").
+    fn of(regions: &[Region], params: &Params) -> BarShares {
+        let features = regions.len() as f64;
+        let vertices: usize = regions.iter().map(|r| r.geometry.coords_count()).sum();
+        let read = 0.055 + 0.06e-6 * vertices as f64 + 5e-6 * features;
+        let write = 0.01 + 12e-6 * features;
+        let total = read + crate::expected_seconds(regions, params) + write;
+        BarShares {
+            read: read / total,
+            write: write / total,
+        }
+    }
+}
 
 /// Reads the source, runs the method, writes the destination (and the report and picture when
 /// asked). On any error or cancellation every existing output is left as it was, and nothing
@@ -196,11 +220,12 @@ fn run_in(
         let pairs: Vec<(&str, &Feature)> = ids.iter().copied().zip(&features).collect();
         trial.ids(&fields, &pairs, position)?;
     }
-    step(READ_SHARE, "checking geometry")?;
+    let shares = BarShares::of(&regions, params);
+    step(shares.read, "checking geometry")?;
 
-    let layout_share = 1.0 - READ_SHARE - WRITE_SHARE;
+    let layout_share = 1.0 - shares.read - shares.write;
     let map = crate::core::generate(&regions, params, &|fraction, message| {
-        progress(READ_SHARE + layout_share * fraction, message)
+        progress(shares.read + layout_share * fraction, message)
     })?;
 
     let grid = StagedGrid {
@@ -215,6 +240,7 @@ fn run_in(
         fields: &fields,
         layer_options: &layer_options,
         ids: id_position.map(|position| (position, ids.as_slice())),
+        write_share: shares.write,
     };
     let (layer_written, grid_notes) = grid.write(params, &map, &features, progress)?;
 
@@ -303,6 +329,8 @@ struct StagedGrid<'a> {
     layer_options: &'a dyn Fn(&str) -> Vec<String>,
     /// The id field's position among the fields, and every region's id in input order.
     ids: Option<(usize, &'a [&'a str])>,
+    /// The progress bar's share of the writing, at its end ([`BarShares`]).
+    write_share: f64,
 }
 
 impl StagedGrid<'_> {
@@ -381,9 +409,9 @@ impl StagedGrid<'_> {
                 computed: write::computed(cell),
             })
             .collect();
-        let write_start = 1.0 - WRITE_SHARE;
+        let write_start = 1.0 - self.write_share;
         let written = write::write(session, &staged_path, &container, &spec, &rows, &|f| {
-            progress(write_start + WRITE_SHARE * f, "writing")
+            progress(write_start + self.write_share * f, "writing")
         })?;
         // The last guard: the staged layer holds every cell, field and id as the probe found.
         if written.fields != self.fields.stored {
@@ -601,4 +629,59 @@ fn hexjson_fields(feature: &Feature) -> Vec<(String, serde_json::Value)> {
             Some((name, value))
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use geo::{Coord, LineString, MultiPolygon, Polygon};
+
+    /// `count` regions side by side, each a square whose boundary has `vertices` vertices.
+    fn squares(count: usize, vertices: usize) -> Vec<Region> {
+        (0..count)
+            .map(|k| {
+                let side = vertices / 4;
+                let x0 = k as f64;
+                let t = |i: usize| i as f64 / side as f64;
+                let ring: Vec<Coord<f64>> = (0..side)
+                    .map(|i| Coord {
+                        x: x0 + t(i),
+                        y: 0.0,
+                    })
+                    .chain((0..side).map(|i| Coord {
+                        x: x0 + 1.0,
+                        y: t(i),
+                    }))
+                    .chain((0..side).map(|i| Coord {
+                        x: x0 + 1.0 - t(i),
+                        y: 1.0,
+                    }))
+                    .chain((0..side).map(|i| Coord {
+                        x: x0,
+                        y: 1.0 - t(i),
+                    }))
+                    .collect();
+                Region {
+                    id: k.to_string(),
+                    geometry: MultiPolygon(vec![Polygon::new(LineString(ring), vec![])]),
+                    group: None,
+                    pin: None,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn reading_takes_more_of_the_bar_the_denser_the_boundaries() {
+        let params = Params::default();
+        let plain = BarShares::of(&squares(1000, 40), &params);
+        let dense = BarShares::of(&squares(1000, 4000), &params);
+        for shares in [plain, dense] {
+            assert!(shares.read > 0.0 && shares.write > 0.0);
+            assert!(shares.read + shares.write < 1.0);
+        }
+        assert!(dense.read > plain.read, "{} {}", plain.read, dense.read);
+        // Writing follows the regions alone, so its share falls as the rest grows.
+        assert!(dense.write < plain.write, "{} {}", plain.write, dense.write);
+    }
 }
