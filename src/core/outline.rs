@@ -464,8 +464,8 @@ fn adjacency(
         })
         .collect();
     // The work, per edge, as measured on the US states at 10⁶ vertices (0.03 s a million
-    // edges): collecting, keying, sorting and matching every edge (1 + 1 + 2 + 1), then putting
-    // those left to search back in order and indexing them (1.5) and searching them (4). Until
+    // edges): collecting, keying, sorting and matching every edge (1 + 1 + 2 + 1), then taking
+    // out those left to search and indexing them (1.5) and searching them (4). Until
     // the matching says how many are left, all are counted; with `point_adjacency` all are
     // searched, unmatched.
     let all = edges.len() as f64;
@@ -496,12 +496,15 @@ fn adjacency(
         reached(share(2.0 * all, all));
         keyed.par_sort_unstable();
         reached(share(4.0 * all, all));
-        let mut rest = Vec::new();
+        // Per edge, whether it is left to search.
+        let mut rest = vec![false; edges.len()];
         for group in keyed.chunk_by(|a, b| a.0 == b.0) {
             let mut owners: Vec<usize> = group.iter().map(|g| g.1).collect();
             owners.dedup();
             if owners.len() == 1 {
-                rest.extend(group.iter().map(|g| g.2));
+                for g in group {
+                    rest[g.2] = true;
+                }
                 continue;
             }
             let e = &edges[group[0].2];
@@ -512,10 +515,12 @@ fn adjacency(
                 }
             }
         }
-        reached(share(5.0 * all, rest.len() as f64));
-        // Back in the boundaries' order, for the runs below.
-        rest.par_sort_unstable();
-        rest.into_iter().map(|k| edges[k]).collect()
+        let left = rest.iter().filter(|&&r| r).count();
+        reached(share(5.0 * all, left as f64));
+        // In the boundaries' order, for the runs below.
+        (edges.iter().zip(rest))
+            .filter_map(|(e, r)| r.then_some(*e))
+            .collect()
     };
     let (left, matched) = (searched.len() as f64, matching * all);
     let runs = edge_runs(&searched);

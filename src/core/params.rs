@@ -59,7 +59,7 @@ pub struct Params {
     pub group_gap: usize,
     pub shifts: Vec<[f64; 2]>,
     pub noise_levels: Vec<f64>,
-    /// Most candidate layouts; `None`: [`Params::layout_budget`] decides by the number of
+    /// Most candidate layouts; `None`: [`Params::layout_count`] decides by the number of
     /// regions.
     pub max_layouts: Option<usize>,
     /// Most candidate layouts refined; `None`: [`Params::refined_count`] decides by the number
