@@ -439,16 +439,14 @@ impl Input {
         if !progress(CHECKING_SHARE, "outline") {
             return Err(Error::Cancelled);
         }
-        // A cancel during the outline is heard at the next question after it.
         let prepared = outline::prepare(
             &unit_refs,
             &drawn_refs,
             &valid_here,
             params,
-            &|share, stage| {
-                progress(CHECKING_SHARE + (1.0 - CHECKING_SHARE) * share, stage);
-            },
-        );
+            &|share, stage| progress(CHECKING_SHARE + (1.0 - CHECKING_SHARE) * share, stage),
+        )
+        .ok_or(Error::Cancelled)?;
         // The union and its outline are computed, not given: arithmetic at the edge of the
         // floating-point range (subnormal coordinates, found by fuzzing) can leave them empty
         // although every region has area, and every later step works on them.

@@ -20,7 +20,7 @@ use rstar::primitives::{GeomWithData, Line, Rectangle};
 use rstar::{Envelope, RTree, RTreeObject, AABB};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
-use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering as AtomicOrdering};
 use std::sync::{Mutex, PoisonError};
 
 /// When two regions' boundaries share a border: where they run within `reach` of each other for
@@ -108,15 +108,16 @@ pub struct Prepared {
 /// a sliver of no area that runs along a neighbour (an out-and-back stretch of border whose two
 /// sides cross), and with it the shared border;
 /// `reached` hears the share of the work done as the costly stages (the adjacency, union and
-/// simplification, side by side, most of it on dense boundaries) begin and end, from whichever
-/// thread ends one.
+/// simplification, side by side, most of it on dense boundaries) go, from any thread; `None`
+/// once it has returned false (cancelled). The adjacency stops within a chunk of its search
+/// and the other side between its stages; the union, one overlay, ends first.
 pub fn prepare(
     regions: &[&MultiPolygon<f64>],
     drawn: &[&MultiPolygon<f64>],
     valid_here: &[bool],
     params: &Params,
-    reached: &(dyn Fn(f64, &str) + Sync),
-) -> Prepared {
+    reached: &(dyn Fn(f64, &str) -> bool + Sync),
+) -> Option<Prepared> {
     let centroids: Vec<Coord<f64>> = regions.iter().map(|r| centroid(r)).collect();
     let area_centroids = regions
         .iter()
@@ -125,32 +126,40 @@ pub fn prepare(
         .collect();
     // A repair stays within the box of the region as drawn: the drawn boxes group both.
     let clusters = clusters(drawn, SHARED.reach);
-    reached(0.05, "outline: adjacency and union");
+    if !reached(0.05, "outline: adjacency and union") {
+        return None;
+    }
     // The borders as drawn give the adjacency, and the union of the regions gives the outline:
     // the two do not meet, and on a dense boundary each is a few tenths of a second that one
     // core spends mostly alone (BENCHMARKS.md "Dense boundaries"), so they run side by side.
     let stages = SideBySide::new(reached);
-    let (adjacency, (regions_union, landmass_of, simplified, joined)) = rayon::join(
+    let (adjacency, other_side) = rayon::join(
         || {
-            let adjacency = adjacency(drawn, &clusters, params.point_adjacency, SHARED, &|share| {
-                stages.advanced(Stage::Adjacency, share)
-            });
-            stages.ended(Stage::Adjacency);
-            adjacency
+            let adjacency =
+                adjacency(drawn, &clusters, params.point_adjacency, SHARED, &|share| {
+                    stages.advanced(Stage::Adjacency, share)
+                })?;
+            stages.ended(Stage::Adjacency).then_some(adjacency)
         },
         || {
             let regions_union = merge(regions, valid_here, &clusters);
+            if stages.stopped() {
+                return None;
+            }
             let landmass_of = landmasses(regions, &regions_union, &centroids);
             let union = clean(regions_union.clone(), &centroids);
-            stages.ended(Stage::Union);
+            if !stages.ended(Stage::Union) {
+                return None;
+            }
             // Small layers still keep a quadrilateral per ring on average.
             let target = ((params.vertices_per_region * regions.len() as f64).ceil() as usize)
                 .max(4 * rings_of(&union).len());
             let (simplified, joined) = simplify(&union, target, params.simplify_tolerance);
-            stages.ended(Stage::Simplification);
-            (regions_union, landmass_of, simplified, joined)
+            let simplified = stages.ended(Stage::Simplification).then_some(simplified)?;
+            Some((regions_union, landmass_of, simplified, joined))
         },
     );
+    let (adjacency, (regions_union, landmass_of, simplified, joined)) = (adjacency?, other_side?);
     // Parts joined across hairline gaps: their regions' borders lie across the gaps too.
     let neighbours = if joined {
         let near = self::adjacency(
@@ -158,8 +167,8 @@ pub fn prepare(
             &self::clusters(drawn, ACROSS_GAPS.reach),
             params.point_adjacency,
             ACROSS_GAPS,
-            &|_| {},
-        );
+            &|_| !stages.stopped(),
+        )?;
         let mut all: Vec<(usize, usize)> = adjacency.iter().chain(&near).copied().collect();
         all.sort_unstable();
         all.dedup();
@@ -174,7 +183,7 @@ pub fn prepare(
         .map(|c| move_inside(c, &index))
         .collect();
     let part_of = parts_holding(&rings, &centroids);
-    Prepared {
+    Some(Prepared {
         centroids,
         area_centroids,
         regions_union,
@@ -183,7 +192,7 @@ pub fn prepare(
         neighbours,
         rings,
         part_of,
-    }
+    })
 }
 
 /// The outline's costly stages, which run side by side.
@@ -222,25 +231,37 @@ impl Stage {
 /// Reports the outline's share done as the [`Stage`]s go, in whichever order they end, and
 /// names those still running.
 struct SideBySide<'r> {
-    reached: &'r (dyn Fn(f64, &str) + Sync),
+    reached: &'r (dyn Fn(f64, &str) -> bool + Sync),
     /// Per stage, the share of it done.
     done: Mutex<[f64; 3]>,
+    /// Whether `reached` has returned false.
+    stopped: AtomicBool,
 }
 
 impl<'r> SideBySide<'r> {
-    fn new(reached: &'r (dyn Fn(f64, &str) + Sync)) -> Self {
+    fn new(reached: &'r (dyn Fn(f64, &str) -> bool + Sync)) -> Self {
         SideBySide {
             reached,
             done: Mutex::new([0.0; 3]),
+            stopped: AtomicBool::new(false),
         }
     }
 
-    fn ended(&self, stage: Stage) {
-        self.advanced(stage, 1.0);
+    /// Whether the work is to stop.
+    fn stopped(&self) -> bool {
+        self.stopped.load(AtomicOrdering::Relaxed)
     }
 
-    /// `stage` has done `share` of its work.
-    fn advanced(&self, stage: Stage, share: f64) {
+    /// `stage` has ended; false if the work is to stop.
+    fn ended(&self, stage: Stage) -> bool {
+        self.advanced(stage, 1.0)
+    }
+
+    /// `stage` has done `share` of its work; false if the work is to stop.
+    fn advanced(&self, stage: Stage, share: f64) -> bool {
+        if self.stopped() {
+            return false;
+        }
         // Reported under the lock, so that the shares heard only grow.
         let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
         let own = &mut done[stage as usize];
@@ -266,7 +287,11 @@ impl<'r> SideBySide<'r> {
         } else {
             format!("outline: {}", running.join(" and "))
         };
-        (self.reached)(0.05 + 0.9 * whole, &message);
+        if !(self.reached)(0.05 + 0.9 * whole, &message) {
+            self.stopped.store(true, AtomicOrdering::Relaxed);
+            return false;
+        }
+        true
     }
 }
 
@@ -440,14 +465,14 @@ impl RTreeObject for Edge {
 /// `point_adjacency`, any point). Works on the boundaries' segments so that it needs no exact
 /// noding: a segment counts as shared where another region's segment runs along it within
 /// `reach` (in cells), for a length above `least` (ditto). `reached` hears the share of the work
-/// done as it goes, from any thread.
+/// done as it goes, from any thread; `None` once it has returned false.
 fn adjacency(
     regions: &[&MultiPolygon<f64>],
     clusters: &[Vec<usize>],
     point_adjacency: bool,
     Touching { reach, least }: Touching,
-    reached: &(dyn Fn(f64) + Sync),
-) -> Vec<(usize, usize)> {
+    reached: &(dyn Fn(f64) -> bool + Sync),
+) -> Option<Vec<(usize, usize)>> {
     // A region alone in its cluster touches no other.
     let edges: Vec<Edge> = (clusters.iter().filter(|c| c.len() > 1))
         .flatten()
@@ -471,7 +496,9 @@ fn adjacency(
     let all = edges.len() as f64;
     let matching = if point_adjacency { 1.0 } else { 5.0 };
     let share = |done: f64, left: f64| done / (matching * all + 5.5 * left);
-    reached(share(all, all));
+    if !reached(share(all, all)) {
+        return None;
+    }
     let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
     // Borders two regions have vertex for vertex (a topologically built layer shares every
     // inner border so) are shared along their whole length: found by sorting, not searching,
@@ -493,9 +520,13 @@ fn adjacency(
         let mut keyed: Vec<([u64; 4], usize, usize)> = (edges.par_iter().enumerate())
             .map(|(k, e)| (key(e), e.region, k))
             .collect();
-        reached(share(2.0 * all, all));
+        if !reached(share(2.0 * all, all)) {
+            return None;
+        }
         keyed.par_sort_unstable();
-        reached(share(4.0 * all, all));
+        if !reached(share(4.0 * all, all)) {
+            return None;
+        }
         // Per edge, whether it is left to search.
         let mut rest = vec![false; edges.len()];
         for group in keyed.chunk_by(|a, b| a.0 == b.0) {
@@ -516,7 +547,9 @@ fn adjacency(
             }
         }
         let left = rest.iter().filter(|&&r| r).count();
-        reached(share(5.0 * all, left as f64));
+        if !reached(share(5.0 * all, left as f64)) {
+            return None;
+        }
         // In the boundaries' order, for the runs below.
         (edges.iter().zip(rest))
             .filter_map(|(e, r)| r.then_some(*e))
@@ -529,8 +562,11 @@ fn adjacency(
             .map(|run| GeomWithData::new(Rectangle::from_aabb(run.envelope), run.edges.clone()))
             .collect(),
     );
-    reached(share(matched + 1.5 * left, left));
+    if !reached(share(matched + 1.5 * left, left)) {
+        return None;
+    }
     let chunks_done = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
     let chunks = searched.len().div_ceil(ADJACENCY_CHUNK).max(1) as f64;
     // In parallel over fixed chunks of edges, summed chunk by chunk in order: the same sums
     // (to the last bit) with any number of threads.
@@ -538,6 +574,9 @@ fn adjacency(
         .par_chunks(ADJACENCY_CHUNK)
         .map(|chunk| {
             let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
+            if stop.load(AtomicOrdering::Relaxed) {
+                return shared;
+            }
             for e in chunk {
                 let env = e.envelope();
                 let t = reach;
@@ -556,23 +595,28 @@ fn adjacency(
                 }
             }
             let done = chunks_done.fetch_add(1, AtomicOrdering::Relaxed) + 1;
-            reached(share(
+            if !reached(share(
                 matched + left * (1.5 + 4.0 * done as f64 / chunks),
                 left,
-            ));
+            )) {
+                stop.store(true, AtomicOrdering::Relaxed);
+            }
             shared
         })
         .collect();
+    if stop.into_inner() {
+        return None;
+    }
     for chunk in per_chunk {
         for (pair, length) in chunk {
             *shared.entry(pair).or_default() += length;
         }
     }
-    shared
-        .into_iter()
+    let pairs = (shared.into_iter())
         .filter(|&(_, length)| point_adjacency || length > least)
         .map(|(pair, _)| pair)
-        .collect()
+        .collect();
+    Some(pairs)
 }
 
 fn touches(e: &Edge, f: &Edge, reach: f64) -> bool {
@@ -1357,8 +1401,9 @@ mod tests {
             &refs,
             &vec![false; refs.len()],
             &Params::default(),
-            &|_, _| (),
-        );
+            &|_, _| true,
+        )
+        .expect("not cancelled");
         // 3×3 rook adjacency: 12 pairs; diagonal neighbours touch at a point only.
         assert_eq!(prepared.adjacency.len(), 12);
         assert!(prepared.adjacency.contains(&(0, 1)));
@@ -1376,8 +1421,9 @@ mod tests {
                 &refs,
                 &vec![false; refs.len()],
                 &with_points,
-                &|_, _| ()
+                &|_, _| true
             )
+            .expect("not cancelled")
             .adjacency
             .len(),
             20
@@ -1389,7 +1435,10 @@ mod tests {
         let prepared = |gap: f64| {
             let regions = [square(0.0, 0.0), square(1.0 + gap, 0.2)];
             let refs: Vec<&MultiPolygon<f64>> = regions.iter().collect();
-            prepare(&refs, &refs, &[true, true], &Params::default(), &|_, _| ())
+            prepare(&refs, &refs, &[true, true], &Params::default(), &|_, _| {
+                true
+            })
+            .expect("not cancelled")
         };
         // Half the closed gap: one part, about the two squares' area (the closing fills the
         // gap's 0.8 × 0.005 strip, and no more than a few gap-wide corners besides).
@@ -1446,8 +1495,9 @@ mod tests {
             &[&holed, &island],
             &[false, false],
             &Params::default(),
-            &|_, _| (),
-        );
+            &|_, _| true,
+        )
+        .expect("not cancelled");
         let holes: Vec<&Ring> = prepared.rings.iter().filter(|r| r.hole).collect();
         assert_eq!(holes.len(), 1, "the 1-cell² lake stays, the sliver goes");
         // The island region's centroid lies in its big square; the tiny part holds no centroid.
@@ -1481,6 +1531,7 @@ mod tests {
         let heard = Mutex::new(Vec::new());
         let reached = |share: f64, message: &str| {
             heard.lock().unwrap().push((share, message.to_owned()));
+            true
         };
         let stages = SideBySide::new(&reached);
         stages.advanced(Stage::Adjacency, 0.5);
@@ -1509,5 +1560,32 @@ mod tests {
                 "outline",
             ]
         );
+    }
+
+    #[test]
+    fn a_cancel_stops_both_sides_of_the_outline() {
+        let asked = AtomicUsize::new(0);
+        let cancel = |_: f64, _: &str| {
+            asked.fetch_add(1, AtomicOrdering::Relaxed);
+            false
+        };
+        let stages = SideBySide::new(&cancel);
+        assert!(!stages.stopped());
+        assert!(!stages.advanced(Stage::Adjacency, 0.1));
+        assert!(stages.stopped());
+        // Neither side asks again.
+        assert!(!stages.ended(Stage::Union));
+        assert_eq!(asked.load(AtomicOrdering::Relaxed), 1);
+        // The whole preparation, cancelled as it begins and as the adjacency reports.
+        let regions: Vec<MultiPolygon<f64>> = (0..3).map(|c| square(c as f64, 0.0)).collect();
+        let refs: Vec<&MultiPolygon<f64>> = regions.iter().collect();
+        let params = Params::default();
+        assert!(prepare(&refs, &refs, &[true; 3], &params, &|_, _| false).is_none());
+        let at_adjacency = |_: f64, m: &str| !m.contains("adjacency");
+        assert!(prepare(&refs, &refs, &[true; 3], &params, &at_adjacency).is_none());
+        // The first report without the union in it is the union's end, whichever side ends
+        // first.
+        let after_the_union = |_: f64, m: &str| m.contains("union");
+        assert!(prepare(&refs, &refs, &[true; 3], &params, &after_the_union).is_none());
     }
 }
