@@ -158,9 +158,14 @@ impl Plan {
 /// See [`crate::expected_seconds`].
 pub fn expected_seconds(regions: &[Region], params: &Params) -> f64 {
     let plan = Plan::of(regions.len(), params);
-    let vertices: usize = regions.iter().map(|r| r.geometry.coords_count()).sum();
-    let steps = StageWeights::preparation(vertices, regions.len()) + plan.layout_work(params);
+    let steps =
+        StageWeights::preparation(vertex_count(regions), regions.len()) + plan.layout_work(params);
     steps * StageWeights::step_seconds(regions.len())
+}
+
+/// The vertices of all `regions`, which the input's preparation follows.
+fn vertex_count(regions: &[Region]) -> usize {
+    regions.iter().map(|r| r.geometry.coords_count()).sum()
 }
 
 /// [`generate`] on the current thread pool.
@@ -179,8 +184,7 @@ fn generate_here(
     } = plan;
     let weights = StageWeights::new(params);
     // The bar's share of the input's preparation, which follows the vertices, not the regions.
-    let vertices: usize = regions.iter().map(|r| r.geometry.coords_count()).sum();
-    let preparation = StageWeights::preparation(vertices, regions.len());
+    let preparation = StageWeights::preparation(vertex_count(regions), regions.len());
     let prepared_share = preparation / (preparation + layout_work);
     if !progress(0.0, "checking geometry") {
         return Err(Error::Cancelled);
@@ -431,7 +435,9 @@ impl Input {
             valid_here,
             drawn,
             mut notes,
-        } = check(regions)?;
+        } = check(regions, &|share| {
+            progress(CHECKING_SHARE * share, "checking geometry")
+        })?;
         let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
         let drawn_refs: Vec<&MultiPolygon<f64>> = (unit.iter().zip(&drawn))
             .map(|(repaired, drawn)| drawn.as_ref().unwrap_or(repaired))
@@ -606,8 +612,10 @@ struct Checked {
 /// 200,000 vertices the check is a quarter of the run). Only a region found invalid there is
 /// checked again in the layer's coordinates, which name the problem where the user can find it,
 /// and repaired; a repair changes the areas and so the frame, and the regions are placed again
-/// (the outline then checks an isolated region again in the new frame).
-fn check(regions: &[Region]) -> Result<Checked, Error> {
+/// (the outline then checks an isolated region again in the new frame). `checking` hears the
+/// share of the vertices checked, each hundredth of them; [`Error::Cancelled`] once it returns
+/// false.
+fn check(regions: &[Region], checking: &(dyn Fn(f64) -> bool + Sync)) -> Result<Checked, Error> {
     if regions.is_empty() {
         return Err(Error::input(None, "the layer has no regions"));
     }
@@ -632,9 +640,34 @@ fn check(regions: &[Region]) -> Result<Checked, Error> {
     let mut valid_here = vec![false; regions.len()];
     let placed = Placed::of(regions, &given).ok();
     if let Some(placed) = &placed {
+        // Reported each hundredth of the vertices, since at 10⁷ vertices the check takes a
+        // second; a cancel leaves the regions not yet begun unchecked.
+        let total = placed
+            .unit
+            .iter()
+            .map(|g| g.coords_count())
+            .sum::<usize>()
+            .max(1);
+        let (done, stop) = (AtomicUsize::new(0), AtomicBool::new(false));
         let valid: Vec<bool> = (placed.unit.par_iter())
-            .map(|g| validity::problem(g).is_none())
+            .map(|g| {
+                if stop.load(Ordering::Relaxed) {
+                    return false;
+                }
+                let valid = validity::problem(g).is_none();
+                let count = g.coords_count();
+                let before = done.fetch_add(count, Ordering::Relaxed);
+                if (before * 100 / total) != ((before + count) * 100 / total)
+                    && !checking((before + count) as f64 / total as f64)
+                {
+                    stop.store(true, Ordering::Relaxed);
+                }
+                valid
+            })
             .collect();
+        if stop.into_inner() {
+            return Err(Error::Cancelled);
+        }
         for (&i, valid) in placed.order.iter().zip(valid) {
             valid_here[i] = valid;
         }
@@ -1573,6 +1606,44 @@ mod tests {
             .iter()
             .any(|n| n.contains("feature a: invalid polygon repaired")));
         assert_eq!(map.adjacency, vec![(0, 1)]);
+    }
+
+    #[test]
+    fn checking_the_geometry_reports_as_it_goes_and_hears_a_cancel() {
+        // 200 squares in a row: the check reports each hundredth of the vertices it has seen.
+        let regions: Vec<Region> = (0..200)
+            .map(|k| {
+                let x = k as f64;
+                Region {
+                    id: format!("r{k}"),
+                    geometry: MultiPolygon(vec![Polygon::new(
+                        LineString::from(vec![(x, 0.0), (x + 1.0, 0.0), (x + 1.0, 1.0), (x, 1.0)]),
+                        vec![],
+                    )]),
+                    group: None,
+                    pin: None,
+                }
+            })
+            .collect();
+        let checking =
+            |fraction: f64, message: &str| message == "checking geometry" && fraction > 0.0;
+        let heard = AtomicUsize::new(0);
+        generate(&regions, &Params::default(), &|fraction, message| {
+            if checking(fraction, message) {
+                heard.fetch_add(1, Ordering::Relaxed);
+            }
+            true
+        })
+        .unwrap();
+        assert!(heard.into_inner() >= 50, "reports while checking");
+        // Cancelled at the first of them: the run ends there, before the outline.
+        let outline = AtomicBool::new(false);
+        let result = generate(&regions, &Params::default(), &|fraction, message| {
+            outline.fetch_or(message.starts_with("outline"), Ordering::Relaxed);
+            !checking(fraction, message)
+        });
+        assert_eq!(result.err(), Some(Error::Cancelled));
+        assert!(!outline.into_inner());
     }
 
     #[test]

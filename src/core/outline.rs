@@ -495,7 +495,14 @@ fn adjacency(
     // searched, unmatched.
     let all = edges.len() as f64;
     let matching = if point_adjacency { 1.0 } else { 5.0 };
-    let share = |done: f64, left: f64| done / (matching * all + 5.5 * left);
+    let share = |done: f64, left: f64| {
+        let whole = matching * all + 5.5 * left;
+        if whole > 0.0 {
+            done / whole
+        } else {
+            1.0
+        }
+    };
     if !reached(share(all, all)) {
         return None;
     }
