@@ -167,7 +167,8 @@ pub fn prepare(
             &self::clusters(drawn, ACROSS_GAPS.reach),
             params.point_adjacency,
             ACROSS_GAPS,
-            &|_| !stages.stopped(),
+            // A second search of every border, heard by the host at the outline's end.
+            &|_| reached(0.95, "outline"),
         )?;
         let mut all: Vec<(usize, usize)> = adjacency.iter().chain(&near).copied().collect();
         all.sort_unstable();
@@ -554,7 +555,7 @@ fn adjacency(
             }
         }
         let left = rest.iter().filter(|&&r| r).count();
-        if !reached(share(5.0 * all, left as f64)) {
+        if !reached(share(matching * all, left as f64)) {
             return None;
         }
         // In the boundaries' order, for the runs below.
