@@ -247,7 +247,6 @@ fn generate_here(
         prepared: &prepared,
         frame,
         reference: metrics::Reference::new(&prepared, frame),
-        home: metrics::Landmasses::new(&prepared.regions_union, prepared.landmass_of.clone()),
         params,
     };
     let run_count = levels.len();
@@ -1093,10 +1092,10 @@ struct Context<'a> {
     pins: Vec<(usize, Position)>,
     prepared: &'a Prepared,
     frame: Frame,
-    /// What the layouts are scored against.
+    /// What the layouts are scored against; its landmasses, in map units, also tell the
+    /// landmass blocks and the refinement where a region would be nearer another landmass than
+    /// its own, so that they answer as the metric does.
     reference: metrics::Reference,
-    /// The regions' landmasses in the unit-cell frame, for the refinement.
-    home: metrics::Landmasses,
     params: &'a Params,
 }
 
@@ -1265,11 +1264,12 @@ impl Context<'_> {
             self.assign(&mut lattice, moved, moved_outline.0.len(), start, report)?
         };
         let area = &self.prepared.area_centroids;
-        let misplaced = |region: usize, p: Coord<f64>| self.home.misplaced(region, p);
+        let home = &self.reference.landmasses;
+        let misplaced = |region: usize, p: Coord<f64>| home.misplaced(region, self.frame.to_map(p));
         let homes = landmass::Homes {
             places: area,
             adjacency: &self.prepared.neighbours,
-            misplaced: self.home.any_counted().then_some(&misplaced),
+            misplaced: home.any_counted().then_some(&misplaced),
         };
         let anchored = |of: &dyn Fn(usize) -> usize| {
             let mut anchored: Vec<usize> = self.pins.iter().map(|&(i, _)| of(i)).collect();
@@ -1318,7 +1318,9 @@ impl Context<'_> {
         if self.grouped {
             breaks += metrics::landmass_breaks(&positions, &self.blocks.of, lattice.tiling);
         }
-        let counted = (0..cells.len()).filter(|&i| self.home.counts(i)).count();
+        let counted = (0..cells.len())
+            .filter(|&i| self.reference.landmasses.counts(i))
+            .count();
         let astray = (metrics.wrong_landmass * counted as f64).round() as usize;
         Layout {
             breaks,
@@ -1397,9 +1399,10 @@ impl Context<'_> {
             .collect();
         let (scale, offset) = metrics::fit(&assigned, area);
         let targets: Vec<Coord<f64>> = area.iter().map(|&c| (c - offset) / scale).collect();
-        let misplaced = |region: usize, (col, row): (i32, i32)| {
-            self.home
-                .misplaced(region, lattice.centre(col, row) * scale + offset)
+        let home = &self.reference.landmasses;
+        let nearer_another = |landmass: usize, (col, row): (i32, i32)| {
+            let place = lattice.centre(col, row) * scale + offset;
+            home.nearer_another(landmass, self.frame.to_map(place))
         };
         // With groups, a region only swaps cells within its block, so every block keeps its
         // patch: the refinement sees the blocks as its landmasses, and no free cells.
@@ -1430,7 +1433,10 @@ impl Context<'_> {
             targets: &targets,
             lattice,
             part_of,
-            misplaced: self.home.any_counted().then_some(&misplaced),
+            misplaced: home.any_counted().then_some(refine::Misplaced {
+                landmass_of: home.of(),
+                nearer_another: &nearer_another,
+            }),
             lakes,
         };
         refine::refine(&layout, cells, self.params, seed, &|done| {

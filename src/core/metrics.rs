@@ -14,7 +14,7 @@ use super::geometry::RingIndex;
 use super::outline::{coords_of, Prepared};
 use super::tiling::{Corner, Position, Tiling};
 use super::{LayoutMetrics, RegionMetrics};
-use geo::{Area, Coord, LineString, MultiPolygon, Winding};
+use geo::{Area, BoundingRect, Coord, LineString, MultiPolygon, Rect, Winding};
 // Fx hashing: the layout's shape is computed for every shift the landmass settling tries, and
 // SipHash was a fifth of a layout before refinement on the US counties.
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
@@ -93,6 +93,9 @@ pub struct Scored<'a> {
 pub struct Landmasses {
     /// Per part, its index if it counts (see `counted`): only those are measured from.
     parts: Vec<Option<RingIndex>>,
+    /// Per part, its bounding box, when it counts: a part whose box is farther from a point
+    /// than the point's own part cannot be nearer (most of the parts, on a world map).
+    boxes: Vec<Option<Rect<f64>>>,
     /// Per region, its part.
     of: Vec<usize>,
     /// Per part, whether it holds enough regions to count (3+), when two parts or more do.
@@ -111,6 +114,9 @@ impl Landmasses {
             .iter()
             .map(|&n| big >= 2 && n >= LANDMASS_REGIONS)
             .collect();
+        let boxes = (parts.0.iter().zip(&counted))
+            .map(|(p, &counts)| if counts { p.bounding_rect() } else { None })
+            .collect();
         let parts = (parts.0.iter().zip(&counted))
             .map(|(p, &counts)| {
                 counts.then(|| {
@@ -119,7 +125,12 @@ impl Landmasses {
                 })
             })
             .collect();
-        Landmasses { parts, of, counted }
+        Landmasses {
+            parts,
+            boxes,
+            of,
+            counted,
+        }
     }
 
     /// Whether any region counts for the wrong-landmass share (two landmasses of 3+ regions).
@@ -133,17 +144,33 @@ impl Landmasses {
         (self.of.get(region)).is_some_and(|&k| self.counted.get(k) == Some(&true))
     }
 
+    /// Per region, its landmass (a part of the union): [`Landmasses::misplaced`] gives the
+    /// regions of one landmass the same answer at the same point.
+    pub fn of(&self) -> &[usize] {
+        &self.of
+    }
+
     /// Whether region `region`, placed at `p`, lies nearer another counted landmass than its
     /// own (and outside its own).
     pub fn misplaced(&self, region: usize, p: Coord<f64>) -> bool {
-        if !self.counts(region) {
+        self.counts(region) && self.nearer_another(self.of[region], p)
+    }
+
+    /// Whether `p` lies outside landmass `home` and nearer another counted landmass; false when
+    /// `home` does not count.
+    pub fn nearer_another(&self, home: usize, p: Coord<f64>) -> bool {
+        if self.counted.get(home) != Some(&true) {
             return false;
         }
-        let own = self.of[region];
-        let home = self.distance(own, p);
-        home > 0.0
-            && (0..self.parts.len())
-                .any(|k| k != own && self.counted[k] && self.distance(k, p) < home)
+        let distance = self.distance(home, p);
+        distance > 0.0
+            && (0..self.parts.len()).any(|k| {
+                k != home
+                    && self.counted[k]
+                    // With a margin for rounding: only a part that cannot be nearer is passed.
+                    && self.boxes[k].is_some_and(|b| box_distance(b, p) < distance * (1.0 + 1e-9))
+                    && self.distance(k, p) < distance
+            })
     }
 
     /// Distance from `p` to part `k` (0 inside it), a counted one.
@@ -154,6 +181,13 @@ impl Landmasses {
             None => f64::INFINITY,
         }
     }
+}
+
+/// Distance from `p` to the box `b` (0 inside it): no point of what the box holds is nearer.
+fn box_distance(b: Rect<f64>, p: Coord<f64>) -> f64 {
+    let dx = (b.min().x - p.x).max(p.x - b.max().x).max(0.0);
+    let dy = (b.min().y - p.y).max(p.y - b.max().y).max(0.0);
+    dx.hypot(dy)
 }
 
 /// Points sampled along each outline for the Fourier descriptors.
@@ -1256,5 +1290,37 @@ mod tests {
             "{}",
             m.wrong_landmass
         );
+    }
+
+    #[test]
+    fn a_landmass_whose_box_is_near_but_whose_land_is_far_is_not_nearer() {
+        // A square island (0, 0)-(2, 2) and an L-shaped landmass: its foot x ≥ 3, y ≤ 1 and its
+        // stem x ≥ 8, in the box (3, 0)-(9, 6), which holds points far from its land.
+        let island: Polygon<f64> =
+            polygon![(x: 0.0, y: 0.0), (x: 2.0, y: 0.0), (x: 2.0, y: 2.0), (x: 0.0, y: 2.0)];
+        let l_shape: Polygon<f64> = polygon![
+            (x: 3.0, y: 0.0), (x: 9.0, y: 0.0), (x: 9.0, y: 6.0), (x: 8.0, y: 6.0),
+            (x: 8.0, y: 1.0), (x: 3.0, y: 1.0)
+        ];
+        let lands = Landmasses::new(&MultiPolygon(vec![island, l_shape]), vec![0, 0, 0, 1, 1, 1]);
+        assert_eq!(lands.of(), [0, 0, 0, 1, 1, 1]);
+        // (4, 3): the island's corner (2, 2) is √5 ≈ 2.24 away, the L's foot 2: nearer the L.
+        let p = Coord { x: 4.0, y: 3.0 };
+        assert!(lands.misplaced(0, p) && lands.nearer_another(0, p));
+        assert!(
+            !lands.misplaced(3, p),
+            "outside its own L but nearer it than the island"
+        );
+        // (3.5, 4.5), inside the L's box: the island √(1.5² + 2.5²) ≈ 2.92 away, the L's land 3.5.
+        let q = Coord { x: 3.5, y: 4.5 };
+        assert!(!lands.nearer_another(0, q));
+        assert!(lands.nearer_another(1, q));
+        // (-1, 1): the island 1 away, the L's box 4: the L is not searched, and not nearer.
+        assert!(!lands.nearer_another(0, Coord { x: -1.0, y: 1.0 }));
+        assert!(lands.nearer_another(1, Coord { x: -1.0, y: 1.0 }));
+        // Inside its own landmass a region is never misplaced; a landmass that does not count
+        // (no such landmass) answers false.
+        assert!(!lands.nearer_another(1, Coord { x: 8.5, y: 3.0 }));
+        assert!(!lands.nearer_another(7, p));
     }
 }
