@@ -221,6 +221,48 @@ fn every_source_field_keeps_its_name_type_subtype_and_value() {
 }
 
 #[test]
+fn a_grid_layer_laid_out_again_keeps_every_field_under_a_name_of_its_own() {
+    // An earlier run's output holds src_grid_col (the source's grid_col) and the computed
+    // grid_col: laid out again, the computed field takes src_grid_col's name, which is taken.
+    let scratch = Scratch::new("again");
+    let src = scratch.path("blocks.gpkg");
+    write_blocks(&src, Some(3857));
+    let first = scratch.path("first.gpkg");
+    run(&job(&src, &first), &Params::default(), &|_, _| true).unwrap();
+    let second = scratch.path("second.gpkg");
+    let outcome = run(&job(&first, &second), &Params::default(), &|_, _| true).unwrap();
+
+    let (first_fields, first_values) = fields_and_values(&first);
+    let (fields, values) = fields_and_values(&second);
+    let names: Vec<&str> = fields.iter().map(|f| f.0.as_str()).collect();
+    let first_names: Vec<&str> = first_fields.iter().map(|f| f.0.as_str()).collect();
+    // The first run's fields in order, those named like a computed field written as src_…,
+    // src_grid_col (the source's grid_col) kept, and the computed fields after them.
+    let computed = &first_names[9..];
+    assert_eq!(first_names[8], "src_grid_col");
+    assert_eq!(names[..9], first_names[..9]);
+    let renamed: Vec<String> = computed
+        .iter()
+        .map(|n| match *n {
+            "grid_col" => "src_grid_col_2".to_owned(),
+            n => format!("src_{n}"),
+        })
+        .collect();
+    assert_eq!(names[9..first_names.len()], renamed);
+    assert_eq!(names[first_names.len()..], *computed);
+    for (row, first_row) in values.iter().zip(&first_values) {
+        assert_eq!(row[..first_fields.len()], first_row[..]);
+    }
+    assert!(
+        (outcome.notes.iter()).any(
+            |n| n.starts_with("the source field \"grid_col\" is written as \"src_grid_col_2\"")
+        ),
+        "{:?}",
+        outcome.notes
+    );
+}
+
+#[test]
 fn a_layer_without_crs_is_taken_as_planar_with_a_note() {
     let scratch = Scratch::new("no-crs");
     let src = scratch.path("blocks.gpkg");

@@ -49,24 +49,42 @@ pub(crate) struct Fields {
     pub layers_in_place: bool,
 }
 
+/// The name a source field called `name` is written under so as not to take a computed
+/// field's: `src_<name>`, or, when another source field has that name already (the output of
+/// an earlier run laid out again), the first of `src_<name>_2`, `src_<name>_3`, … that no source
+/// field and no field written has (compared as the drivers do, without case).
+fn renamed(name: &str, source: &[String], fields: &[OutputField]) -> String {
+    let taken = |candidate: &str| {
+        (source.iter().map(String::as_str))
+            .chain(fields.iter().map(|f| f.name.as_str()))
+            .chain(computed_fields().map(|(c, _)| c))
+            .any(|n| n.eq_ignore_ascii_case(candidate))
+    };
+    let base = format!("src_{name}");
+    std::iter::once(base.clone())
+        .chain((2..).map(|k| format!("{base}_{k}")))
+        .find(|candidate| !taken(candidate))
+        .expect("some suffix is free")
+}
+
 impl Trial<'_> {
     /// Makes the grid layer in memory with one blank feature of the `source` layer, renaming
     /// source fields until every computed field keeps its name.
     pub(crate) fn fields(&self, source: &Defn) -> Result<Fields, Error> {
         let names: Vec<String> = source.fields().map(|f| f.name()).collect();
         let computed = |name: &str| computed_fields().any(|(c, _)| c.eq_ignore_ascii_case(name));
-        let mut fields: Vec<OutputField> = names
-            .iter()
-            .enumerate()
-            .map(|(k, name)| OutputField {
+        let mut fields: Vec<OutputField> = (0..names.len())
+            .map(|k| OutputField {
                 source: k,
-                name: if computed(name) {
-                    format!("src_{name}")
-                } else {
-                    name.clone()
-                },
+                name: names[k].clone(),
             })
             .collect();
+        for k in 0..fields.len() {
+            if computed(&names[k]) {
+                let name = renamed(&names[k], &names, &fields);
+                fields[k].name = name;
+            }
+        }
         // Null (not unset) values, which even formats without a schema (GeoJSON) write, so that
         // every field reads back.
         let mut blank =
@@ -112,7 +130,10 @@ impl Trial<'_> {
                 .position(|k| k.eq_ignore_ascii_case(clash))
                 .filter(|&k| fields[k].name == names[fields[k].source]);
             match taker {
-                Some(k) => fields[k].name = format!("src_{}", names[fields[k].source]),
+                Some(k) => {
+                    let name = renamed(&names[fields[k].source], &names, &fields);
+                    fields[k].name = name;
+                }
                 None => {
                     return Err(Error::Io(format!(
                         "the {} driver does not keep the name of the computed field {clash:?}",
