@@ -8,6 +8,10 @@
     make-test-layers.py archipelago N ISLANDS SEED OUT.gpkg
                                                     a mainland of N Voronoi cells and ISLANDS
                                                     one-region islands scattered round it
+    make-test-layers.py isles COUNT N SEED OUT.gpkg COUNT round islands scattered over the
+                                                    square, each of N Voronoi cells (an island
+                                                    nation's municipalities: many landmasses
+                                                    that count for the wrong-landmass share)
     make-test-layers.py river N SEED OUT.gpkg       Voronoi cells cut by a river-like gap, the
                                                     outline's two banks close together
     make-test-layers.py strip N SEED OUT.gpkg       a long thin country (Chile, Norway, Vietnam):
@@ -149,6 +153,23 @@ def archipelago(n, count, seed):
             placed.append(island)
             ids.append(f"i{len(ids) - n}")
             geometries.append(island)
+    return ids, geometries
+
+
+def isles(count, n, seed):
+    """`count` round islands on a jittered grid over the square, none touching another, each
+    cut into `n` Voronoi cells."""
+    rng = np.random.default_rng(seed)
+    side = math.ceil(math.sqrt(count))
+    pitch = SIDE / side
+    ids, geometries = [], []
+    for k in range(count):
+        cx = (k % side + 0.5 + rng.uniform(-0.2, 0.2)) * pitch
+        cy = (k // side + 0.5 + rng.uniform(-0.2, 0.2)) * pitch
+        island = shapely.Point(cx, cy).buffer(pitch * rng.uniform(0.15, 0.3), quad_segs=8)
+        for j, cell in enumerate(voronoi_tiles(random_points(rng, n, island), island)):
+            ids.append(f"i{k}_{j}")
+            geometries.append(cell)
     return ids, geometries
 
 
@@ -294,6 +315,9 @@ def main(argv):
         write(args[1], ids, geometries)
     elif kind == "archipelago":
         ids, geometries = archipelago(int(args[0]), int(args[1]), int(args[2]))
+        write(args[3], ids, geometries)
+    elif kind == "isles":
+        ids, geometries = isles(int(args[0]), int(args[1]), int(args[2]))
         write(args[3], ids, geometries)
     elif kind == "river":
         ids, geometries = river(int(args[0]), int(args[1]))

@@ -14,7 +14,9 @@ use super::geometry::RingIndex;
 use super::outline::{coords_of, Prepared};
 use super::tiling::{Corner, Position, Tiling};
 use super::{LayoutMetrics, RegionMetrics};
-use geo::{Area, BoundingRect, Coord, LineString, MultiPolygon, Rect, Winding};
+use geo::{Area, BoundingRect, Coord, LineString, MultiPolygon, Winding};
+use rstar::primitives::{GeomWithData, Rectangle};
+use rstar::{RTree, AABB};
 // Fx hashing: the layout's shape is computed for every shift the landmass settling tries, and
 // SipHash was a fifth of a layout before refinement on the US counties.
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
@@ -93,9 +95,10 @@ pub struct Scored<'a> {
 pub struct Landmasses {
     /// Per part, its index if it counts (see `counted`): only those are measured from.
     parts: Vec<Option<RingIndex>>,
-    /// Per part, its bounding box, when it counts: a part whose box is farther from a point
-    /// than the point's own part cannot be nearer (most of the parts, on a world map).
-    boxes: Vec<Option<Rect<f64>>>,
+    /// The counted parts' boxes, indexed: a place asks only the parts whose box comes nearer
+    /// than its own landmass (a layer of 2,000 islands of three regions each asked every one
+    /// of them, most of its run).
+    boxes: RTree<GeomWithData<Rectangle<[f64; 2]>, usize>>,
     /// Per region, its part.
     of: Vec<usize>,
     /// Per part, whether it holds enough regions to count (3+), when two parts or more do.
@@ -114,9 +117,13 @@ impl Landmasses {
             .iter()
             .map(|&n| big >= 2 && n >= LANDMASS_REGIONS)
             .collect();
-        let boxes = (parts.0.iter().zip(&counted))
-            .map(|(p, &counts)| if counts { p.bounding_rect() } else { None })
-            .collect();
+        let boxes = super::outline::box_tree((parts.0.iter().zip(&counted)).map(|(p, &counts)| {
+            if counts {
+                p.bounding_rect()
+            } else {
+                None
+            }
+        }));
         let parts = (parts.0.iter().zip(&counted))
             .map(|(p, &counts)| {
                 counts.then(|| {
@@ -163,14 +170,19 @@ impl Landmasses {
             return false;
         }
         let distance = self.distance(home, p);
-        distance > 0.0
-            && (0..self.parts.len()).any(|k| {
-                k != home
-                    && self.counted[k]
-                    // With a margin for rounding: only a part that cannot be nearer is passed.
-                    && self.boxes[k].is_some_and(|b| box_distance(b, p) < distance * (1.0 + 1e-9))
-                    && self.distance(k, p) < distance
-            })
+        // Inside its own landmass (or nowhere, for a point that is not finite).
+        if distance <= 0.0 || distance.is_nan() {
+            return false;
+        }
+        // With a margin for rounding: only a part that cannot be nearer is passed.
+        let reach = distance * (1.0 + 1e-9);
+        let around = AABB::from_corners([p.x - reach, p.y - reach], [p.x + reach, p.y + reach]);
+        (self.boxes.locate_in_envelope_intersecting(&around)).any(|part| {
+            let (low, high) = (part.geom().lower(), part.geom().upper());
+            part.data != home
+                && box_distance(low, high, p) < reach
+                && self.distance(part.data, p) < distance
+        })
     }
 
     /// Distance from `p` to part `k` (0 inside it), a counted one.
@@ -183,10 +195,11 @@ impl Landmasses {
     }
 }
 
-/// Distance from `p` to the box `b` (0 inside it): no point of what the box holds is nearer.
-fn box_distance(b: Rect<f64>, p: Coord<f64>) -> f64 {
-    let dx = (b.min().x - p.x).max(p.x - b.max().x).max(0.0);
-    let dy = (b.min().y - p.y).max(p.y - b.max().y).max(0.0);
+/// Distance from `p` to the box from `low` to `high` (0 inside it): no point of what the box
+/// holds is nearer.
+fn box_distance(low: [f64; 2], high: [f64; 2], p: Coord<f64>) -> f64 {
+    let dx = (low[0] - p.x).max(p.x - high[0]).max(0.0);
+    let dy = (low[1] - p.y).max(p.y - high[1]).max(0.0);
     dx.hypot(dy)
 }
 

@@ -323,7 +323,7 @@ pub fn overlaps(
 }
 
 /// The bounding boxes `boxes` (none for an empty geometry), each with its index, in an R-tree.
-fn box_tree(
+pub(crate) fn box_tree(
     boxes: impl Iterator<Item = Option<Rect<f64>>>,
 ) -> RTree<GeomWithData<Rectangle<[f64; 2]>, usize>> {
     RTree::bulk_load(
