@@ -223,7 +223,8 @@ fn every_source_field_keeps_its_name_type_subtype_and_value() {
 #[test]
 fn a_grid_layer_laid_out_again_keeps_every_field_under_a_name_of_its_own() {
     // An earlier run's output holds src_grid_col (the source's grid_col) and the computed
-    // grid_col: laid out again, the computed field takes src_grid_col's name, which is taken.
+    // grid_col: laid out again, that grid_col is a source field to rename, and src_grid_col,
+    // the name it would take, is taken.
     let scratch = Scratch::new("again");
     let src = scratch.path("blocks.gpkg");
     write_blocks(&src, Some(3857));

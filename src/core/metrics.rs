@@ -117,13 +117,9 @@ impl Landmasses {
             .iter()
             .map(|&n| big >= 2 && n >= LANDMASS_REGIONS)
             .collect();
-        let boxes = super::outline::box_tree((parts.0.iter().zip(&counted)).map(|(p, &counts)| {
-            if counts {
-                p.bounding_rect()
-            } else {
-                None
-            }
-        }));
+        let boxes = super::outline::box_tree(
+            (parts.0.iter().zip(&counted)).map(|(p, &counts)| p.bounding_rect().filter(|_| counts)),
+        );
         let parts = (parts.0.iter().zip(&counted))
             .map(|(p, &counts)| {
                 counts.then(|| {
@@ -160,7 +156,7 @@ impl Landmasses {
     /// Whether region `region`, placed at `p`, lies nearer another counted landmass than its
     /// own (and outside its own).
     pub fn misplaced(&self, region: usize, p: Coord<f64>) -> bool {
-        self.counts(region) && self.nearer_another(self.of[region], p)
+        (self.of.get(region)).is_some_and(|&home| self.nearer_another(home, p))
     }
 
     /// Whether `p` lies outside landmass `home` and nearer another counted landmass; false when
