@@ -47,11 +47,6 @@ const MAX_SPAN: f64 = 1e6;
 /// from overflow (1e300 squared is infinite, and the layer would seem to have no area).
 const LARGEST_COORDINATE: f64 = 1e100;
 
-/// The share of the input's preparation that checking the geometry takes: 0.065 s of 0.38 s on
-/// the US states at 10⁶ vertices, 0.075 s of 0.33 s on the US counties (2026-12-06,
-/// BENCHMARKS.md "Progress"; validity at 10⁷ vertices took 3.5 s of about 9 s).
-const CHECKING_SHARE: f64 = 0.2;
-
 /// The most neighbouring regions a layer's regions may have on average. Regions side by side
 /// form a planar map, whose regions have fewer than 6 neighbours on average (Euler's formula),
 /// and borders that overlap sloppily or a layer copied into itself once or twice add a few more
@@ -426,22 +421,23 @@ pub struct Input {
 }
 
 impl Input {
-    /// `progress` hears the share of the preparation done: 0 as the geometry is checked,
-    /// [`CHECKING_SHARE`] as the outline is begun.
+    /// `progress` hears the share of the preparation done: 0 as the geometry is checked, the
+    /// share expected for that ([`Preparation`]) as the outline is begun.
     pub fn of(regions: &[Region], params: &Params, progress: Progress) -> Result<Input, Error> {
+        let checking_share = Preparation::of(vertex_count(regions), regions.len()).checking_share();
         let Checked {
             placed: Placed { order, frame, unit },
             valid_here,
             drawn,
             mut notes,
         } = check(regions, &|share| {
-            progress(CHECKING_SHARE * share, "checking geometry")
+            progress(checking_share * share, "checking geometry")
         })?;
         let unit_refs: Vec<&MultiPolygon<f64>> = unit.iter().collect();
         let drawn_refs: Vec<&MultiPolygon<f64>> = (unit.iter().zip(&drawn))
             .map(|(repaired, drawn)| drawn.as_ref().unwrap_or(repaired))
             .collect();
-        if !progress(CHECKING_SHARE, "outline") {
+        if !progress(checking_share, "outline") {
             return Err(Error::Cancelled);
         }
         let prepared = outline::prepare(
@@ -449,7 +445,7 @@ impl Input {
             &drawn_refs,
             &valid_here,
             params,
-            &|share, stage| progress(CHECKING_SHARE + (1.0 - CHECKING_SHARE) * share, stage),
+            &|share, stage| progress(checking_share + (1.0 - checking_share) * share, stage),
         )
         .ok_or(Error::Cancelled)?;
         // The union and its outline are computed, not given: arithmetic at the edge of the
@@ -984,12 +980,9 @@ impl StageWeights {
     }
 
     /// Checking and preparing an input of `vertices` vertices and `regions` regions (reading it
-    /// is the host's share), in Snake steps: 0.33 µs a vertex, 13 µs a region (centroids, the
-    /// network) and 15 ms besides, fitted to the US counties and states as given and densified
-    /// to 10⁶ vertices (the same measurements).
+    /// is the host's share), in Snake steps ([`Preparation`]).
     fn preparation(vertices: usize, regions: usize) -> f64 {
-        let seconds = 0.015 + 0.33e-6 * vertices as f64 + 13e-6 * regions as f64;
-        seconds / Self::step_seconds(regions)
+        Preparation::of(vertices, regions).seconds() / Self::step_seconds(regions)
     }
 
     /// A layout before refinement: assigned and scored.
@@ -1000,6 +993,34 @@ impl StageWeights {
     /// The refinement of a layout, and its scoring again.
     fn refinement(&self) -> f64 {
         self.refining + Self::SCORING
+    }
+}
+
+/// The time the input's preparation is expected to take, in seconds: checking the geometry
+/// (0.065 s of 0.38 s on the US states at 10⁶ vertices, 0.075 s of 0.33 s on the US counties:
+/// 0.07 µs a vertex; 2026-12-06, BENCHMARKS.md "Progress"), then the outline's costly stages
+/// ([`outline::expected_seconds`]) and the rest (13 µs a region, for the centroids and the
+/// network, and 15 ms besides, fitted to the US counties and states as given).
+struct Preparation {
+    checking: f64,
+    outline: f64,
+}
+
+impl Preparation {
+    fn of(vertices: usize, regions: usize) -> Preparation {
+        Preparation {
+            checking: 0.07e-6 * vertices as f64,
+            outline: 0.015 + outline::expected_seconds(vertices, regions) + 13e-6 * regions as f64,
+        }
+    }
+
+    fn seconds(&self) -> f64 {
+        self.checking + self.outline
+    }
+
+    /// The share of the preparation that checking the geometry takes.
+    fn checking_share(&self) -> f64 {
+        self.checking / self.seconds()
     }
 }
 

@@ -132,7 +132,7 @@ pub fn prepare(
     // The borders as drawn give the adjacency, and the union of the regions gives the outline:
     // the two do not meet, and on a dense boundary each is a few tenths of a second that one
     // core spends mostly alone (BENCHMARKS.md "Dense boundaries"), so they run side by side.
-    let stages = SideBySide::new(reached);
+    let stages = SideBySide::new(reached, expected_costs(drawn, &clusters));
     let (adjacency, other_side) = rayon::join(
         || {
             let adjacency =
@@ -154,7 +154,10 @@ pub fn prepare(
             // Small layers still keep a quadrilateral per ring on average.
             let target = ((params.vertices_per_region * regions.len() as f64).ceil() as usize)
                 .max(4 * rings_of(&union).len());
-            let (simplified, joined) = simplify(&union, target, params.simplify_tolerance);
+            let (simplified, joined) =
+                simplify(&union, target, params.simplify_tolerance, &|share| {
+                    stages.advanced(Stage::Simplification, share)
+                })?;
             let simplified = stages.ended(Stage::Simplification).then_some(simplified)?;
             Some((regions_union, landmass_of, simplified, joined))
         },
@@ -214,25 +217,55 @@ impl Stage {
             Stage::Simplification => "simplification",
         }
     }
+}
 
-    /// The stage's share of the outline's work. At 10⁶ vertices the adjacency takes about as
-    /// long as the union and the simplification after it (the US states: 0.25 s against 0.25 s
-    /// and 0.05 s; the US counties: 0.23 s against 0.16 and 0.08 s); on a star of long spikes
-    /// the simplification is all of it (0.15 s, the others 0.01 s). 2026-12-06, BENCHMARKS.md
-    /// "Progress".
-    fn share(self) -> f64 {
-        match self {
-            Stage::Adjacency => 0.5,
-            Stage::Union => 0.3,
-            Stage::Simplification => 0.2,
+/// The time each [`Stage`] is expected to take, in µs, on `overlaid` vertices of regions with
+/// neighbours and `lone` vertices of regions without. Measured on the shared layers densified to
+/// 10⁶ vertices, the world among them, and on a star of 10⁶ (2026-12-07, BENCHMARKS.md
+/// "Progress"): the adjacency takes 0.16–0.25 µs an edge of a region with neighbours (a lone
+/// region has none to find); the union 0.11–0.29 µs a vertex where regions are overlaid, 0.05 µs
+/// where a lone region's polygons are its union; the simplification 0.03–0.13 µs an overlaid
+/// vertex (the inner borders are gone from the union: it keeps a tenth to a third of them) and
+/// 1.1 µs a lone region's vertex (all kept).
+fn costs(overlaid: f64, lone: f64) -> [f64; 3] {
+    [
+        0.2 * overlaid,
+        0.2 * overlaid + 0.05 * lone,
+        0.07 * overlaid + 1.0 * lone,
+    ]
+}
+
+/// [`costs`] on `regions`, grouped in `clusters` (a cluster of one is a lone region).
+fn expected_costs(regions: &[&MultiPolygon<f64>], clusters: &[Vec<usize>]) -> [f64; 3] {
+    let (mut overlaid, mut lone) = (0.0, 0.0);
+    for cluster in clusters {
+        let vertices: usize = cluster.iter().map(|&k| vertex_count(regions[k])).sum();
+        match cluster.len() {
+            1 => lone += vertices as f64,
+            _ => overlaid += vertices as f64,
         }
     }
+    costs(overlaid, lone)
+}
+
+/// The time [`prepare`]'s costly stages are expected to take, in seconds, on `vertices` vertices
+/// of `regions` regions, before the regions are grouped: the regions of a layer of more than one
+/// taken as having neighbours. The adjacency runs beside the union and the simplification.
+pub fn expected_seconds(vertices: usize, regions: usize) -> f64 {
+    let v = vertices as f64;
+    let [adjacency, union, simplification] = match regions {
+        0 | 1 => costs(0.0, v),
+        _ => costs(v, 0.0),
+    };
+    1e-6 * adjacency.max(union + simplification)
 }
 
 /// Reports the outline's share done as the [`Stage`]s go, in whichever order they end, and
 /// names those still running.
 struct SideBySide<'r> {
     reached: &'r (dyn Fn(f64, &str) -> bool + Sync),
+    /// Per stage, the time it is expected to take ([`expected_costs`]).
+    costs: [f64; 3],
     /// Per stage, the share of it done.
     done: Mutex<[f64; 3]>,
     /// Whether `reached` has returned false.
@@ -240,9 +273,10 @@ struct SideBySide<'r> {
 }
 
 impl<'r> SideBySide<'r> {
-    fn new(reached: &'r (dyn Fn(f64, &str) -> bool + Sync)) -> Self {
+    fn new(reached: &'r (dyn Fn(f64, &str) -> bool + Sync), costs: [f64; 3]) -> Self {
         SideBySide {
             reached,
+            costs,
             done: Mutex::new([0.0; 3]),
             stopped: AtomicBool::new(false),
         }
@@ -267,15 +301,21 @@ impl<'r> SideBySide<'r> {
         let mut done = self.done.lock().unwrap_or_else(PoisonError::into_inner);
         let own = &mut done[stage as usize];
         *own = own.max(share.clamp(0.0, 1.0));
-        // The adjacency runs beside the union and then the simplification: the outline is as
-        // far on as the side further on.
+        // The adjacency runs beside the union and then the simplification, and the outline
+        // takes as long as the longer side: the time a side has run, as its share done of the
+        // time expected for it says, over that longer time. When the expectations hold, the
+        // share heard follows the time; when a side is faster than expected, it jumps ahead at
+        // that side's end.
         let side = |stages: &[Stage]| -> (f64, f64) {
-            let done = stages.iter().map(|&s| s.share() * done[s as usize]).sum();
-            (done, stages.iter().map(|s| s.share()).sum())
+            let done = (stages.iter())
+                .map(|&s| self.costs[s as usize] * done[s as usize])
+                .sum();
+            (done, stages.iter().map(|&s| self.costs[s as usize]).sum())
         };
         let (beside, beside_whole) = side(&[Stage::Adjacency]);
         let (then, then_whole) = side(&[Stage::Union, Stage::Simplification]);
-        let whole = beside.max(then) / beside_whole.max(then_whole);
+        let whole = (beside.max(then) / beside_whole.max(then_whole)).min(1.0);
+        let whole = if whole.is_finite() { whole } else { 0.0 };
         // The simplification begins as the union ends.
         let begun =
             |s: &Stage| !matches!(s, Stage::Simplification) || done[Stage::Union as usize] == 1.0;
@@ -893,19 +933,41 @@ fn vertex_count(p: &MultiPolygon<f64>) -> usize {
 /// variant then runs once. geo preserves topology within each part only, so a result whose
 /// rings cross each other is refused and the tolerance halved ([`halved`]). Parts nearer each
 /// other than the outline's resolution are joined ([`close_gaps`]) once the finest detail is
-/// gone (a hairline apart, simplified rings cross); also says whether any were.
+/// gone (a hairline apart, simplified rings cross); also says whether any were. `heard` hears
+/// the share done as the finest detail goes (most of the time on a long, detailed boundary: a
+/// second on a star of 10⁶ vertices); `None` once it has returned false.
 fn simplify(
     union: &MultiPolygon<f64>,
     target: usize,
     tolerance: Option<f64>,
-) -> (MultiPolygon<f64>, bool) {
+    heard: &dyn Fn(f64) -> bool,
+) -> Option<(MultiPolygon<f64>, bool)> {
     if tolerance.is_none() && vertex_count(union) <= target {
-        return close_gaps(union.clone());
+        return Some(close_gaps(union.clone()));
     }
     let finest = FINEST_DETAIL.min(tolerance.unwrap_or(f64::INFINITY));
     // Vertices within a tenth of the finest detail of the last one kept go first, in linear
-    // time, then plain Visvalingam, which needs no segment index.
-    let fine = close_gaps(visvalingam(&thin(union, 0.1 * finest.sqrt()), finest));
+    // time, then plain Visvalingam, which needs no segment index. The shares are of the time
+    // measured on the shared layers densified to 10⁶ vertices and on a star of 10⁶: the first
+    // pass is 0.6–0.9 of it where the simplification takes long (the world's coasts, the star),
+    // less where it does not (0.2 on the US counties: 0.07 s; BENCHMARKS.md "Progress").
+    let thinned = thin(union, 0.1 * finest.sqrt());
+    let fine = visvalingam(&thinned, finest, &|share| heard(0.05 + 0.8 * share))?;
+    let fine = close_gaps(fine);
+    if !heard(0.9) {
+        return None;
+    }
+    Some(simplified_from(union, fine, target, tolerance, finest))
+}
+
+/// The rest of [`simplify`], from the `fine` outline of `union`.
+fn simplified_from(
+    union: &MultiPolygon<f64>,
+    fine: (MultiPolygon<f64>, bool),
+    target: usize,
+    tolerance: Option<f64>,
+    finest: f64,
+) -> (MultiPolygon<f64>, bool) {
     // The fine outline is checked for crossings only once it or a simplification of it has to
     // be: when the simplification passes, its own check suffices (checking the fine outline
     // first was a tenth of the run on a star of long spikes, whose boxes all overlap in the
@@ -986,7 +1048,8 @@ fn tolerance_for(polygons: &MultiPolygon<f64>, target: usize) -> f64 {
     let rings =
         (polygons.0.iter()).flat_map(|p| std::iter::once(p.exterior()).chain(p.interiors()));
     let mut levels: Vec<f64> = rings
-        .flat_map(|r| Removals::until(r, f64::INFINITY).levels)
+        .flat_map(|r| Removals::until(r, f64::INFINITY, &mut |_| true))
+        .flat_map(|removals| removals.levels)
         .collect();
     levels.sort_unstable_by(f64::total_cmp);
     // With tolerance `eps`, each ring loses its levels ≤ `eps` (a ring's levels only grow).
@@ -1001,29 +1064,46 @@ fn tolerance_for(polygons: &MultiPolygon<f64>, target: usize) -> f64 {
 /// geo's plain Visvalingam (`simplify_vw`) of every ring of `polygons` with tolerance `eps`, the
 /// same vertices kept ([`Removals`]) in a heap of 16-byte entries where geo's are 40: on a
 /// boundary of 200,000 vertices the fine pass of [`simplify`] was a quarter of the run, most of
-/// it moving heap entries.
-fn visvalingam(polygons: &MultiPolygon<f64>, eps: f64) -> MultiPolygon<f64> {
-    let ring = |ring: &LineString<f64>| {
+/// it moving heap entries. `heard` hears the share of the heap's work done as the rings go
+/// (time follows the entries taken from the heap, about three per vertex when most of them go:
+/// each removal scores both neighbours anew); `None` once it has returned false.
+fn visvalingam(
+    polygons: &MultiPolygon<f64>,
+    eps: f64,
+    heard: &dyn Fn(f64) -> bool,
+) -> Option<MultiPolygon<f64>> {
+    let total = 3.0 * vertex_count(polygons).max(1) as f64;
+    let mut before = 0;
+    let mut ring = |ring: &LineString<f64>| -> Option<LineString<f64>> {
         if eps <= 0.0 {
-            return ring.clone();
+            return Some(ring.clone());
         }
         let mut kept = vec![true; ring.0.len()];
-        for &k in &Removals::until(ring, eps).order {
+        let removals = Removals::until(ring, eps, &mut |taken| {
+            heard((before + taken) as f64 / total)
+        })?;
+        before += 3 * ring.0.len();
+        for &k in &removals.order {
             kept[k as usize] = false;
         }
-        LineString(
+        Some(LineString(
             (ring.0.iter().zip(&kept))
                 .filter(|(_, &k)| k)
                 .map(|(&c, _)| c)
                 .collect(),
-        )
+        ))
     };
-    MultiPolygon(
-        (polygons.0.iter())
-            .map(|p| Polygon::new(ring(p.exterior()), p.interiors().iter().map(ring).collect()))
-            .collect(),
-    )
+    let mut parts = Vec::with_capacity(polygons.0.len());
+    for p in &polygons.0 {
+        let exterior = ring(p.exterior())?;
+        let holes = p.interiors().iter().map(&mut ring).collect::<Option<_>>()?;
+        parts.push(Polygon::new(exterior, holes));
+    }
+    Some(MultiPolygon(parts))
 }
+
+/// How many heap entries [`Removals::until`] takes between reports: a few milliseconds' worth.
+const REMOVALS_HEARD: usize = 1 << 14;
 
 /// What geo's plain Visvalingam removes from a ring with tolerance `eps`: the vertices in the
 /// order it removes them, and for each the largest triangle area removed up to and including it.
@@ -1033,13 +1113,19 @@ fn visvalingam(polygons: &MultiPolygon<f64>, eps: f64) -> MultiPolygon<f64> {
 /// area alone, filled and updated in the same order, so that equal areas come out in geo's
 /// order too. geo finds a stale entry by its vertex's neighbours; a vertex's neighbours change
 /// only where the vertex is scored anew (or removed), so a stamp per vertex does the same.
+/// `heard` hears, every [`REMOVALS_HEARD`] entries taken from the heap, how many were; `None`
+/// once it has returned false.
 struct Removals {
     order: Vec<u32>,
     levels: Vec<f64>,
 }
 
 impl Removals {
-    fn until(ring: &LineString<f64>, eps: f64) -> Removals {
+    fn until(
+        ring: &LineString<f64>,
+        eps: f64,
+        heard: &mut dyn FnMut(usize) -> bool,
+    ) -> Option<Removals> {
         /// A vertex scored with the neighbours it had, as its stamp then says.
         struct Scored {
             area: f64,
@@ -1084,7 +1170,12 @@ impl Removals {
         let mut order = Vec::with_capacity(n.saturating_sub(2));
         let mut levels = Vec::with_capacity(n.saturating_sub(2));
         let mut level = 0.0_f64;
+        let mut taken = 0;
         while let Some(smallest) = heap.pop() {
+            taken += 1;
+            if taken % REMOVALS_HEARD == 0 && !heard(taken) {
+                return None;
+            }
             // geo stops at the first triangle above the tolerance, stale or not.
             if smallest.area > eps {
                 break;
@@ -1116,7 +1207,7 @@ impl Removals {
                 }
             }
         }
-        Removals { order, levels }
+        Some(Removals { order, levels })
     }
 }
 
@@ -1311,6 +1402,32 @@ mod tests {
     }
 
     #[test]
+    fn a_long_simplification_reports_as_it_goes_and_stops_when_told() {
+        // A band of 60,000 vertices, each a quarter of a hundredth of a cell from the next (the
+        // thinning keeps them all): the finest detail's pass takes some 180,000 entries from its
+        // heap, about eleven reports' worth.
+        let band = spiral(3.0, 1.0, 0.2, 30_000);
+        let heard = Mutex::new(Vec::new());
+        let listen = |share: f64| {
+            heard.lock().unwrap().push(share);
+            true
+        };
+        assert!(simplify(&band, 60, None, &listen).is_some());
+        let shares = heard.into_inner().unwrap();
+        assert!(shares.windows(2).all(|w| w[0] < w[1]), "{shares:?}");
+        let during = shares.iter().filter(|&&s| s > 0.05 && s < 0.85).count();
+        assert!(during >= 5, "{shares:?}");
+        // Told to stop at its first report, it stops there.
+        let asked = AtomicUsize::new(0);
+        let stop = |_: f64| {
+            asked.fetch_add(1, AtomicOrdering::Relaxed);
+            false
+        };
+        assert!(simplify(&band, 60, None, &stop).is_none());
+        assert_eq!(asked.load(AtomicOrdering::Relaxed), 1);
+    }
+
+    #[test]
     fn a_simplification_that_would_cross_itself_keeps_more_vertices_instead() {
         // Three turns of a band a cell wide with gaps of a fifth of a cell (79 cells², 4,000
         // vertices), to be simplified to 60: plain Visvalingam to that count cuts across the
@@ -1319,7 +1436,7 @@ mod tests {
         let band = spiral(3.0, 1.0, 0.2, 2_000);
         let plain = band.simplify_vw(tolerance_for(&band, 60));
         assert!(crosses(&plain));
-        let (outline, _) = simplify(&band, 60, None);
+        let (outline, _) = simplify(&band, 60, None, &|_| true).unwrap();
         assert!(!crosses(&outline));
         let kept = vertex_count(&outline);
         assert!(kept > 60 && kept < 4_000, "{kept} vertices");
@@ -1336,7 +1453,7 @@ mod tests {
     fn removals_give_geos_simplification_for_every_tolerance() {
         for (n, staircase) in [(400, false), (400, true), (3, false), (5, true)] {
             let ring = wiggly(n, staircase);
-            let levels = Removals::until(&ring, f64::INFINITY).levels;
+            let levels = (Removals::until(&ring, f64::INFINITY, &mut |_| true).unwrap()).levels;
             let holed = MultiPolygon(vec![Polygon::new(
                 ring.clone(),
                 vec![LineString(ring.0.iter().rev().map(|&c| c * 0.5).collect())],
@@ -1350,7 +1467,10 @@ mod tests {
                     "{n} vertices, staircase {staircase}, tolerance {eps}"
                 );
                 // The same vertices, ties and all, ring by ring.
-                assert_eq!(visvalingam(&holed, eps), holed.simplify_vw(eps));
+                assert_eq!(
+                    visvalingam(&holed, eps, &|_| true).unwrap(),
+                    holed.simplify_vw(eps)
+                );
             }
         }
     }
@@ -1535,25 +1655,29 @@ mod tests {
     }
 
     #[test]
-    fn the_outline_reports_as_far_as_its_further_side_and_only_forward() {
+    fn the_outline_reports_the_time_its_sides_have_run_against_the_longer_and_only_forward() {
         let heard = Mutex::new(Vec::new());
         let reached = |share: f64, message: &str| {
             heard.lock().unwrap().push((share, message.to_owned()));
             true
         };
-        let stages = SideBySide::new(&reached);
+        // Each stage expected to take as long: the union and the simplification after it are
+        // the longer side, twice the adjacency.
+        let stages = SideBySide::new(&reached, [1.0, 1.0, 1.0]);
         stages.advanced(Stage::Adjacency, 0.5);
         stages.advanced(Stage::Adjacency, 0.25);
         stages.ended(Stage::Union);
         stages.ended(Stage::Adjacency);
+        stages.advanced(Stage::Simplification, 0.5);
         stages.ended(Stage::Simplification);
         let heard = heard.into_inner().unwrap();
         let shares: Vec<f64> = heard.iter().map(|(s, _)| *s).collect();
-        // Each side weighs 0.5: half the adjacency is half the outline, and a report of less
-        // changes nothing; the union is 0.6 of its side, and the adjacency's end (the side
-        // further on) all of the outline, which the simplification's end leaves there: from
+        // Half the adjacency is a quarter of the outline's time, and a report of less changes
+        // nothing; the union's end is half of it, as is the adjacency's end, which the longer
+        // side has reached; half the simplification is three quarters, and its end all: from
         // 0.05 to 0.95 of the bar.
-        let expected = [0.5, 0.5, 0.6, 1.0, 1.0].map(|d| 0.05 + 0.9 * d);
+        let expected = [0.25, 0.25, 0.5, 0.5, 0.75, 1.0].map(|d| 0.05 + 0.9 * d);
+        assert_eq!(shares.len(), expected.len());
         for (got, want) in shares.iter().zip(expected) {
             assert!((got - want).abs() < 1e-12, "{shares:?}");
         }
@@ -1564,6 +1688,7 @@ mod tests {
                 "outline: adjacency and union",
                 "outline: adjacency and union",
                 "outline: adjacency and simplification",
+                "outline: simplification",
                 "outline: simplification",
                 "outline",
             ]
@@ -1577,7 +1702,7 @@ mod tests {
             asked.fetch_add(1, AtomicOrdering::Relaxed);
             false
         };
-        let stages = SideBySide::new(&cancel);
+        let stages = SideBySide::new(&cancel, [1.0, 1.0, 1.0]);
         assert!(!stages.stopped());
         assert!(!stages.advanced(Stage::Adjacency, 0.1));
         assert!(stages.stopped());
