@@ -215,6 +215,17 @@ fn a_cancelled_run_leaves_an_existing_destination_untouched_at_every_stage() {
         assert_eq!(std::fs::read(&dst).unwrap(), before, "cancelled at {stage}");
         assert_eq!(scratch.listing(), ["grid.gpkg"], "cancelled at {stage}");
     }
+    // While the features are read: the host is asked as reading begins and again at the first
+    // feature.
+    std::fs::write(&dst, before).unwrap();
+    let readings = std::sync::atomic::AtomicUsize::new(0);
+    let result = run(&job, &Params::default(), &|_, message| {
+        message != "reading" || readings.fetch_add(1, std::sync::atomic::Ordering::Relaxed) == 0
+    });
+    assert_eq!(readings.into_inner(), 2);
+    assert_eq!(result.err(), Some(Error::Cancelled), "cancelled reading");
+    assert_eq!(std::fs::read(&dst).unwrap(), before, "cancelled reading");
+    assert_eq!(scratch.listing(), ["grid.gpkg"], "cancelled reading");
     std::fs::write(&dst, before).unwrap();
     let result = run(&job, &Params::default(), &|fraction, _| fraction < 1.0);
     assert_eq!(result.err(), Some(Error::Cancelled), "cancelled at the end");

@@ -212,7 +212,7 @@ fn run_in(
         regions,
         labels,
         notes: source_notes,
-    } = Source::read(session, job, &mut layer)?;
+    } = Source::read(session, job, &mut layer, &read::Going::new(progress))?;
     // The ids as the output would store them, before the layout.
     let id_position = id_field.and_then(|i| fields.fields.iter().position(|f| f.source == i));
     let ids: Vec<&str> = regions.iter().map(|r| r.id.as_str()).collect();
@@ -465,7 +465,7 @@ pub fn read_regions(job: &Job) -> Result<SourceRegions, Error> {
     let session = Session::start();
     let dataset = read::open(&session, &job.src)?;
     let (mut layer, layer_note) = read::layer(&dataset, job.src_layer.as_deref())?;
-    let source = Source::read(&session, job, &mut layer)?;
+    let source = Source::read(&session, job, &mut layer, &read::Going::new(&|_, _| true))?;
     Ok(SourceRegions {
         regions: source.regions,
         labels: source.labels,
@@ -487,7 +487,13 @@ struct Source<'l> {
 }
 
 impl<'l> Source<'l> {
-    fn read(session: &Session, job: &Job, layer: &'l mut Layer) -> Result<Source<'l>, Error> {
+    /// `going` says whether to go on, asked as the features are read.
+    fn read(
+        session: &Session,
+        job: &Job,
+        layer: &'l mut Layer,
+        going: &read::Going,
+    ) -> Result<Source<'l>, Error> {
         let fields: Vec<String> = layer.defn().fields().map(|f| f.name()).collect();
         let id_field = job
             .id_field
@@ -517,7 +523,7 @@ impl<'l> Source<'l> {
             }
             None => layer.spatial_ref().map(crs::traditional),
         };
-        let features = read::features(session, layer, job.where_clause.as_deref())?;
+        let features = read::features(session, layer, job.where_clause.as_deref(), going)?;
         let pin = match (job.pin_col_field.as_deref(), job.pin_row_field.as_deref()) {
             (Some(col), Some(row)) => Some((
                 read::require_field(&fields, col, "-pin_col")?,
@@ -536,7 +542,7 @@ impl<'l> Source<'l> {
             group: group_field,
             pin,
         };
-        let checked = read::check(&features, &setting_fields)?;
+        let checked = read::check(&features, &setting_fields, going)?;
         // Read as drawn only when the working-CRS rule needs the extents.
         let drawn = std::cell::OnceCell::new();
         let drawn_once = || drawn.get_or_init(|| read::drawn(&checked));
@@ -547,7 +553,7 @@ impl<'l> Source<'l> {
             || read::boxes(drawn_once()),
         )?;
         let seam = plan.seam.map(|central| (central, drawn_once().as_slice()));
-        let regions = read::regions(session, &checked, plan.transform.as_ref(), seam)?;
+        let regions = read::regions(session, &checked, plan.transform.as_ref(), seam, going)?;
         let labels = checked.into_iter().map(|c| c.label).collect();
         notes.extend(plan.note.clone());
         Ok(Source {

@@ -2,14 +2,50 @@
 //! turn each feature into a [`Region`], refusing (and naming) what the method cannot use.
 
 use super::session::Session;
-use crate::core::{Error, Region};
+use crate::core::{Error, Progress, Region};
 use crate::crs::LonLatBox;
 use crate::input::{polygons_of, Admission, GeometryKind};
 use gdal::spatial_ref::CoordTransform;
 use gdal::vector::{Feature, FieldValue, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
 use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
 use geo::{CoordsIter, MultiPolygon};
+use std::cell::Cell;
 use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Whether to go on reading, as the host says when asked (its progress, at the bar's start):
+/// reading 10⁷ vertices takes 0.6 s, a cancel is to be heard within 0.2 s, and a host as slow
+/// to ask as QGIS's Python is not to be asked once per feature of a layer of 85,000. The time
+/// decides only when the host is asked, never what is read.
+pub(crate) struct Going<'p> {
+    progress: Progress<'p>,
+    /// When the host was last asked; `None` before the first feature, which asks.
+    asked: Cell<Option<Instant>>,
+}
+
+/// How often [`Going`] asks the host.
+const ASKED_EVERY: Duration = Duration::from_millis(20);
+
+impl<'p> Going<'p> {
+    pub(crate) fn new(progress: Progress<'p>) -> Self {
+        Going {
+            progress,
+            asked: Cell::new(None),
+        }
+    }
+
+    /// `Err(Cancelled)` once the host, when asked, says to stop.
+    fn on(&self) -> Result<(), Error> {
+        if (self.asked.get()).is_some_and(|asked| asked.elapsed() < ASKED_EVERY) {
+            return Ok(());
+        }
+        self.asked.set(Some(Instant::now()));
+        match (self.progress)(0.0, "reading") {
+            true => Ok(()),
+            false => Err(Error::Cancelled),
+        }
+    }
+}
 
 pub(crate) fn open(session: &Session, src: &str) -> Result<Dataset, Error> {
     super::paths::refuse_special_file("source", Path::new(src))?;
@@ -118,6 +154,7 @@ pub(crate) fn features<'l>(
     session: &Session,
     layer: &'l mut Layer,
     where_clause: Option<&str>,
+    going: &Going,
 ) -> Result<Vec<Feature<'l>>, Error> {
     let what = match where_clause {
         Some(expression) => format!("invalid -where expression {expression:?}"),
@@ -131,7 +168,11 @@ pub(crate) fn features<'l>(
     // Some drivers (GeoPackage) check a filter only when reading, and a read error ends the
     // iteration like the end of the layer would: either must fail the run, not shorten it.
     session.take_error();
-    let features: Vec<Feature<'l>> = layer.features().collect();
+    let mut features: Vec<Feature<'l>> = Vec::new();
+    for feature in layer.features() {
+        going.on()?;
+        features.push(feature);
+    }
     if let Some(reason) = session.take_error() {
         return Err(Error::Io(format!("{what}: {reason}")));
     }
@@ -172,13 +213,18 @@ pub(crate) struct SettingFields {
 /// rules every face shares ([`Admission`]: null, empty or repeated ids, null, empty or
 /// non-polygonal geometries, each refused naming the feature); pins that are not whole numbers
 /// or given by halves are refused too ([`crate::pins::pin_of`]).
-pub(crate) fn check(features: &[Feature], fields: &SettingFields) -> Result<Vec<Checked>, Error> {
+pub(crate) fn check(
+    features: &[Feature],
+    fields: &SettingFields,
+    going: &Going,
+) -> Result<Vec<Checked>, Error> {
     let (id_field, label_field, group_field) = (fields.id, fields.label, fields.group);
     let mut admission = Admission::default();
     features
         .iter()
         .enumerate()
         .map(|(k, feature)| {
+            going.on()?;
             let fid = match feature.fid() {
                 Some(fid) => format!("FID {fid}"),
                 None => format!("number {}", k + 1),
@@ -310,6 +356,7 @@ pub(crate) fn regions(
     checked: &[Checked],
     transform: Option<&CoordTransform>,
     seam: Option<(f64, &[Option<MultiPolygon<f64>>])>,
+    going: &Going,
 ) -> Result<Vec<Region>, Error> {
     use rayon::prelude::*;
     let cannot_read = |id: &str| Error::input(Some(id), "the geometry cannot be read as polygons");
@@ -324,6 +371,7 @@ pub(crate) fn regions(
         .iter()
         .enumerate()
         .map(|(k, c)| {
+            going.on()?;
             let cut = match cuts.get(k) {
                 Some(Some(cut)) => Some(
                     Geometry::from_wkb(&crate::wkb::from_multi_polygon(cut))
