@@ -264,6 +264,52 @@ fn a_grid_layer_laid_out_again_keeps_every_field_under_a_name_of_its_own() {
 }
 
 #[test]
+fn fields_named_alike_but_for_case_are_written_as_ogr2ogr_writes_them() {
+    // GeoJSON tells "Name" from "NAME"; GeoPackage (SQLite) and Shapefile (DBF) do not. GDAL
+    // 3.6's ogr2ogr, run by hand on this very layer, writes the fields as expected below.
+    let scratch = Scratch::new("case");
+    let src = scratch.path("case.geojson");
+    let square = |x: u32| format!("[[[{x},0],[{},0],[{},1],[{x},1],[{x},0]]]", x + 1, x + 1);
+    let feature = |x: u32, name: &str, upper: &str, lower: &str| {
+        format!(
+            r#"{{"type":"Feature","properties":{{"code":"{name}","Name":"{upper}","NAME":"{lower}","name2":"x"}},"geometry":{{"type":"Polygon","coordinates":{}}}}}"#,
+            square(x)
+        )
+    };
+    std::fs::write(
+        &src,
+        format!(
+            r#"{{"type":"FeatureCollection","features":[{},{}]}}"#,
+            feature(0, "a", "Alpha", "ALPHA"),
+            feature(1, "b", "Beta", "BETA")
+        ),
+    )
+    .unwrap();
+    for dst in ["grid.gpkg", "grid.shp", "grid.geojson"] {
+        let dst = scratch.path(dst);
+        let outcome = run(&job(&src, &dst), &Params::default(), &|_, _| true).unwrap();
+        let (fields, values) = fields_and_values(&dst);
+        let names: Vec<&str> = fields.iter().map(|f| f.0.as_str()).take(4).collect();
+        // "name2" is taken (without case), so the second "Name" takes "NAME3".
+        assert_eq!(
+            names,
+            ["code", "Name", "NAME3", "name2"],
+            "{}",
+            dst.display()
+        );
+        let rows: Vec<&[String]> = values.iter().map(|row| &row[..3]).collect();
+        assert_eq!(rows, [["a", "Alpha", "ALPHA"], ["b", "Beta", "BETA"]]);
+        assert!(
+            (outcome.notes.iter()).any(|n| n.starts_with(
+                "the source field \"NAME\" is written as \"NAME3\", as ogr2ogr writes it"
+            )),
+            "{:?}",
+            outcome.notes
+        );
+    }
+}
+
+#[test]
 fn a_layer_without_crs_is_taken_as_planar_with_a_note() {
     let scratch = Scratch::new("no-crs");
     let src = scratch.path("blocks.gpkg");

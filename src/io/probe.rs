@@ -5,7 +5,10 @@
 //!   which snakegrid asks for), and whether the creation options are acceptable;
 //! - the names the driver gives the fields (a DBF cuts them to 10 characters, SQLite launders
 //!   them), so that a source field that would take a computed field's name is written as
-//!   `src_<name>` instead and the computed values keep their documented names;
+//!   `src_<name>` instead and the computed values keep their documented names (and, as
+//!   ogr2ogr does, a source field whose name another took already, compared without case, as
+//!   `<name>2`, `<name>3`, …: a GeoJSON layer may hold both `Name` and `NAME`, which a
+//!   GeoPackage cannot);
 //! - whether the driver can add a layer to a file it wrote, and delete one (GeoPackage can, KML
 //!   cannot), which decides what `-update` and `-overwrite` may do with an existing file.
 //!
@@ -67,9 +70,34 @@ fn renamed(name: &str, source: &[String], fields: &[OutputField]) -> String {
         .expect("some suffix is free")
 }
 
+/// Renames, as ogr2ogr does, each of `fields` whose name an earlier one has (compared without
+/// case, as SQLite and DBF compare them) to the first of `<name>2`, `<name>3`, … that no field
+/// and no computed field has; says which were renamed.
+fn without_repeated_names(fields: &mut [OutputField]) -> Vec<bool> {
+    let mut renamed = vec![false; fields.len()];
+    for k in 0..fields.len() {
+        let same = |a: &str, b: &str| a.eq_ignore_ascii_case(b);
+        if !fields[..k].iter().any(|f| same(&f.name, &fields[k].name)) {
+            continue;
+        }
+        let taken = |candidate: &str| {
+            (fields.iter().map(|f| f.name.as_str()))
+                .chain(computed_fields().map(|(c, _)| c))
+                .any(|n| same(n, candidate))
+        };
+        let name = (2..)
+            .map(|n| format!("{}{n}", fields[k].name))
+            .find(|candidate| !taken(candidate))
+            .expect("some suffix is free");
+        fields[k].name = name;
+        renamed[k] = true;
+    }
+    renamed
+}
+
 impl Trial<'_> {
     /// Makes the grid layer in memory with one blank feature of the `source` layer, renaming
-    /// source fields until every computed field keeps its name.
+    /// source fields until every computed field keeps its name and no two fields have one.
     pub(crate) fn fields(&self, source: &Defn) -> Result<Fields, Error> {
         let names: Vec<String> = source.fields().map(|f| f.name()).collect();
         let computed = |name: &str| computed_fields().any(|(c, _)| c.eq_ignore_ascii_case(name));
@@ -85,6 +113,7 @@ impl Trial<'_> {
                 fields[k].name = name;
             }
         }
+        let repeated = without_repeated_names(&mut fields);
         // Null (not unset) values, which even formats without a schema (GeoJSON) write, so that
         // every field reads back.
         let mut blank =
@@ -108,13 +137,19 @@ impl Trial<'_> {
                     .iter()
                     .zip(kept)
                     .filter(|(field, _)| field.name != names[field.source])
-                    .map(|(field, as_stored)| {
-                        format!(
+                    .map(|(field, as_stored)| match repeated[field.source] {
+                        true => format!(
+                            "the source field {:?} is written as {as_stored:?}, as ogr2ogr \
+                             writes it: another field has its name but for case, which most \
+                             formats (GeoPackage, Shapefile) cannot tell apart",
+                            names[field.source],
+                        ),
+                        false => format!(
                             "the source field {:?} is written as {as_stored:?}: the {} output \
                              would otherwise give it the name of the computed field",
                             names[field.source],
                             self.driver.short_name()
-                        )
+                        ),
                     })
                     .collect();
                 return Ok(Fields {
