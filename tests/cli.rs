@@ -461,6 +461,12 @@ fn outputs_that_would_mislead_or_hang_are_refused_before_any_work() {
         1,
         "does not exist",
     );
+    // GDAL's virtual file systems, as outputs: said so, not "the folder does not exist" (or,
+    // for /vsistdout/, that it "already exists").
+    for virtual_path in ["/vsistdout/", "/vsimem/grid.gpkg"] {
+        let to_virtual = snakegrid(["-q", "-f", "GeoJSON", virtual_path, p(&src)]);
+        assert_fails(&to_virtual, 1, "GDAL's virtual file systems");
+    }
     // Opening a named pipe waits for a writer: as source or destination it is refused, not a
     // hang.
     let fifo = scratch.path("pipe");

@@ -133,6 +133,7 @@ fn run_in(
     for (what, path) in &outputs {
         source_files.refuse(what, Path::new(path))?;
     }
+    on_disk(&outputs)?;
     distinct_outputs(&outputs)?;
     let file_name = Path::new(&job.dst)
         .file_name()
@@ -600,6 +601,21 @@ fn outputs(job: &Job) -> Vec<(&'static str, &str)> {
                 .filter_map(|(what, path)| Some((what, path.as_deref()?))),
         )
         .collect()
+}
+
+/// Refuses an output in one of GDAL's virtual file systems (`/vsistdout/`, `/vsizip/`,
+/// `/vsimem/`, …), which the run cannot make beside and then rename into place: the message
+/// says so, where the folder checks would call `/vsistdout/` a file that exists.
+fn on_disk(outputs: &[(&str, &str)]) -> Result<(), Error> {
+    match (outputs.iter()).find(|(_, path)| path.starts_with("/vsi")) {
+        Some((what, path)) => Err(Error::Io(format!(
+            "the {what} {path:?} is in one of GDAL's virtual file systems, which snakegrid does \
+             not write to: every output is made beside its path and renamed into place once \
+             complete, so that a failed run leaves nothing half-written; write a file and copy \
+             it (snakegrid out.geojson SRC && cat out.geojson)"
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// Refuses a run two of whose outputs are one file, however spelled.
