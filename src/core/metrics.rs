@@ -16,7 +16,7 @@ use super::tiling::{Corner, Position, Tiling};
 use super::{LayoutMetrics, RegionMetrics};
 use geo::{Area, BoundingRect, Coord, LineString, MultiPolygon, Winding};
 use rstar::primitives::{GeomWithData, Rectangle};
-use rstar::{RTree, AABB};
+use rstar::{PointDistance, RTree, AABB};
 // Fx hashing: the layout's shape is computed for every shift the landmass settling tries, and
 // SipHash was a fifth of a layout before refinement on the US counties.
 use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
@@ -173,10 +173,10 @@ impl Landmasses {
         // With a margin for rounding: only a part that cannot be nearer is passed.
         let reach = distance * (1.0 + 1e-9);
         let around = AABB::from_corners([p.x - reach, p.y - reach], [p.x + reach, p.y + reach]);
+        // No point of what a box holds is nearer than the box itself.
         (self.boxes.locate_in_envelope_intersecting(&around)).any(|part| {
-            let (low, high) = (part.geom().lower(), part.geom().upper());
             part.data != home
-                && box_distance(low, high, p) < reach
+                && part.geom().distance_2(&[p.x, p.y]) < reach * reach
                 && self.distance(part.data, p) < distance
         })
     }
@@ -189,14 +189,6 @@ impl Landmasses {
             None => f64::INFINITY,
         }
     }
-}
-
-/// Distance from `p` to the box from `low` to `high` (0 inside it): no point of what the box
-/// holds is nearer.
-fn box_distance(low: [f64; 2], high: [f64; 2], p: Coord<f64>) -> f64 {
-    let dx = (low[0] - p.x).max(p.x - high[0]).max(0.0);
-    let dy = (low[1] - p.y).max(p.y - high[1]).max(0.0);
-    dx.hypot(dy)
 }
 
 /// Points sampled along each outline for the Fourier descriptors.

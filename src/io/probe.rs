@@ -57,17 +57,27 @@ pub(crate) struct Fields {
 /// an earlier run laid out again), the first of `src_<name>_2`, `src_<name>_3`, … that no source
 /// field and no field written has (compared as the drivers do, without case).
 fn renamed(name: &str, source: &[String], fields: &[OutputField]) -> String {
-    let taken = |candidate: &str| {
-        (source.iter().map(String::as_str))
-            .chain(fields.iter().map(|f| f.name.as_str()))
-            .chain(computed_fields().map(|(c, _)| c))
-            .any(|n| n.eq_ignore_ascii_case(candidate))
-    };
     let base = format!("src_{name}");
-    std::iter::once(base.clone())
-        .chain((2..).map(|k| format!("{base}_{k}")))
+    let candidates = std::iter::once(base.clone()).chain((2..).map(|k| format!("{base}_{k}")));
+    first_free(candidates, source.iter().map(String::as_str), fields)
+}
+
+/// The first of `candidates` (an endless run of names) that none of `names`, no field of
+/// `fields` and no computed field has, compared as the drivers compare names: without case.
+fn first_free<'n>(
+    mut candidates: impl Iterator<Item = String>,
+    names: impl Iterator<Item = &'n str> + Clone,
+    fields: &[OutputField],
+) -> String {
+    let taken = |candidate: &str| {
+        names.clone().any(|n| n.eq_ignore_ascii_case(candidate))
+            || (fields.iter().map(|f| f.name.as_str()))
+                .chain(computed_fields().map(|(c, _)| c))
+                .any(|n| n.eq_ignore_ascii_case(candidate))
+    };
+    candidates
         .find(|candidate| !taken(candidate))
-        .expect("some suffix is free")
+        .expect("an endless run of names has a free one")
 }
 
 /// Renames, as ogr2ogr does, each of `fields` whose name an earlier one has (compared without
@@ -76,19 +86,15 @@ fn renamed(name: &str, source: &[String], fields: &[OutputField]) -> String {
 fn without_repeated_names(fields: &mut [OutputField]) -> Vec<bool> {
     let mut renamed = vec![false; fields.len()];
     for k in 0..fields.len() {
-        let same = |a: &str, b: &str| a.eq_ignore_ascii_case(b);
-        if !fields[..k].iter().any(|f| same(&f.name, &fields[k].name)) {
+        let name = &fields[k].name;
+        if !fields[..k]
+            .iter()
+            .any(|f| f.name.eq_ignore_ascii_case(name))
+        {
             continue;
         }
-        let taken = |candidate: &str| {
-            (fields.iter().map(|f| f.name.as_str()))
-                .chain(computed_fields().map(|(c, _)| c))
-                .any(|n| same(n, candidate))
-        };
-        let name = (2..)
-            .map(|n| format!("{}{n}", fields[k].name))
-            .find(|candidate| !taken(candidate))
-            .expect("some suffix is free");
+        let candidates = (2..).map(|n| format!("{name}{n}"));
+        let name = first_free(candidates, std::iter::empty(), fields);
         fields[k].name = name;
         renamed[k] = true;
     }
