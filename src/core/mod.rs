@@ -36,6 +36,7 @@ mod snake;
 mod thin;
 pub mod tiling;
 mod validity;
+mod watch;
 
 use geo::{Coord, MultiPolygon, Polygon};
 use serde::Serialize;

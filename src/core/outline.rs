@@ -8,6 +8,7 @@ use super::geometry::{
 };
 use super::network::DisjointSets;
 use super::overlay::{self, Given};
+use super::watch;
 use super::Params;
 use geo::algorithm::buffer::{BufferStyle, LineJoin};
 use geo::orient::{Direction, Orient};
@@ -19,6 +20,7 @@ use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Line, Rectangle};
 use rstar::{Envelope, RTree, RTreeObject, AABB};
 use std::cmp::Ordering;
+use std::collections::BTreeMap;
 use std::collections::BinaryHeap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering as AtomicOrdering};
 use std::sync::{Mutex, PoisonError};
@@ -142,11 +144,18 @@ pub fn prepare(
             stages.ended(Stage::Adjacency).then_some(adjacency)
         },
         || {
-            let regions_union = merge(regions, valid_here, &clusters);
-            if stages.stopped() {
+            // One overlay call per cluster, which cannot stop itself: watched, and heard by
+            // the host as time passes against the time expected for it.
+            let expected = stages.expected_seconds(Stage::Union);
+            let regions_union = merge(regions, valid_here, &clusters, |seconds| {
+                stages.advanced(Stage::Union, 1.0 - (-seconds / expected).exp())
+            })?;
+            // Each of the next two is a tenth of a second on a union of 3.5 million vertices
+            // (the US states at 10⁷): the host is asked between them, the share held.
+            let landmass_of = landmasses(regions, &regions_union, &centroids);
+            if !stages.advanced(Stage::Union, 0.0) {
                 return None;
             }
-            let landmass_of = landmasses(regions, &regions_union, &centroids);
             let union = clean(regions_union.clone(), &centroids);
             if !stages.ended(Stage::Union) {
                 return None;
@@ -280,6 +289,11 @@ impl<'r> SideBySide<'r> {
             done: Mutex::new([0.0; 3]),
             stopped: AtomicBool::new(false),
         }
+    }
+
+    /// The time `stage` is expected to take, in seconds.
+    fn expected_seconds(&self, stage: Stage) -> f64 {
+        1e-6 * self.costs[stage as usize]
     }
 
     /// Whether the work is to stop.
@@ -444,9 +458,7 @@ fn landmasses(
                 .unwrap_or(largest),
         )
     };
-    regions
-        .iter()
-        .zip(centroids)
+    (regions.par_iter().zip(centroids))
         .map(|(region, &centroid)| {
             let mut area = vec![0.0; union.0.len()];
             for polygon in &region.0 {
@@ -515,26 +527,18 @@ fn adjacency(
     reached: &(dyn Fn(f64) -> bool + Sync),
 ) -> Option<Vec<(usize, usize)>> {
     // A region alone in its cluster touches no other.
-    let edges: Vec<Edge> = (clusters.iter().filter(|c| c.len() > 1))
+    let members: Vec<usize> = (clusters.iter().filter(|c| c.len() > 1))
         .flatten()
-        .flat_map(|&region| {
-            let mp = regions[region];
-            mp.0.iter()
-                .flat_map(|p| std::iter::once(p.exterior()).chain(p.interiors()))
-                .flat_map(|ring| ring.lines())
-                .map(move |l| Edge {
-                    a: l.start,
-                    b: l.end,
-                    region,
-                })
-        })
+        .copied()
         .collect();
+    let all = (members.iter())
+        .map(|&region| vertex_count(regions[region]))
+        .sum::<usize>() as f64;
     // The work, per edge, as measured on the US states at 10⁶ vertices (0.03 s a million
     // edges): collecting, keying, sorting and matching every edge (1 + 1 + 2 + 1), then taking
     // out those left to search and indexing them (1.5) and searching them (4). Until
     // the matching says how many are left, all are counted; with `point_adjacency` all are
     // searched, unmatched.
-    let all = edges.len() as f64;
     let matching = if point_adjacency { 1.0 } else { 5.0 };
     let share = |done: f64, left: f64| {
         let whole = matching * all + 5.5 * left;
@@ -544,64 +548,28 @@ fn adjacency(
             1.0
         }
     };
-    if !reached(share(all, all)) {
-        return None;
-    }
-    let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
-    // Borders two regions have vertex for vertex (a topologically built layer shares every
-    // inner border so) are shared along their whole length: found by sorting, not searching,
-    // which is what keeps millions of vertices fast. The rest is searched for borders that run
-    // along each other within the tolerance. With `point_adjacency` every edge is searched,
-    // since regions that meet at a corner share no edge.
-    let searched: Vec<Edge> = if point_adjacency {
-        edges
+    let edges = boundary_edges(regions, &members, &|collected| {
+        reached(share(collected * all, all))
+    })?;
+    // With `point_adjacency` every edge is searched, since regions that meet at a corner share
+    // no edge.
+    let (mut shared, searched) = if point_adjacency {
+        (Default::default(), edges)
     } else {
-        let key = |e: &Edge| {
-            let (p, q) = if (e.a.x, e.a.y) <= (e.b.x, e.b.y) {
-                (e.a, e.b)
-            } else {
-                (e.b, e.a)
-            };
-            // + 0.0 turns −0 into 0, which must match.
-            [p.x, p.y, q.x, q.y].map(|v| (v + 0.0).to_bits())
-        };
-        let mut keyed: Vec<([u64; 4], usize, usize)> = (edges.par_iter().enumerate())
-            .map(|(k, e)| (key(e), e.region, k))
-            .collect();
-        if !reached(share(2.0 * all, all)) {
+        // A sort of 10⁷ edges takes a second and cannot stop itself: watched, and heard by the
+        // host as time passes against the time expected for it.
+        let expected = 4.0 * all * SECONDS_PER_EDGE;
+        let (shared, searched) = watch::watched(
+            move || shared_vertex_for_vertex(edges),
+            |seconds| {
+                let done = 1.0 - (-seconds / expected).exp();
+                reached(share((1.0 + 4.0 * done) * all, all))
+            },
+        )?;
+        if !reached(share(matching * all, searched.len() as f64)) {
             return None;
         }
-        keyed.par_sort_unstable();
-        if !reached(share(4.0 * all, all)) {
-            return None;
-        }
-        // Per edge, whether it is left to search.
-        let mut rest = vec![false; edges.len()];
-        for group in keyed.chunk_by(|a, b| a.0 == b.0) {
-            let mut owners: Vec<usize> = group.iter().map(|g| g.1).collect();
-            owners.dedup();
-            if owners.len() == 1 {
-                for g in group {
-                    rest[g.2] = true;
-                }
-                continue;
-            }
-            let e = &edges[group[0].2];
-            let length = (e.b - e.a).x.hypot((e.b - e.a).y);
-            for (k, &i) in owners.iter().enumerate() {
-                for &j in &owners[k + 1..] {
-                    *shared.entry((i, j)).or_default() += length;
-                }
-            }
-        }
-        let left = rest.iter().filter(|&&r| r).count();
-        if !reached(share(matching * all, left as f64)) {
-            return None;
-        }
-        // In the boundaries' order, for the runs below.
-        (edges.iter().zip(rest))
-            .filter_map(|(e, r)| r.then_some(*e))
-            .collect()
+        (shared, searched)
     };
     let (left, matched) = (searched.len() as f64, matching * all);
     let runs = edge_runs(&searched);
@@ -618,10 +586,10 @@ fn adjacency(
     let chunks = searched.len().div_ceil(ADJACENCY_CHUNK).max(1) as f64;
     // In parallel over fixed chunks of edges, summed chunk by chunk in order: the same sums
     // (to the last bit) with any number of threads.
-    let per_chunk: Vec<std::collections::BTreeMap<(usize, usize), f64>> = searched
+    let per_chunk: Vec<BTreeMap<(usize, usize), f64>> = searched
         .par_chunks(ADJACENCY_CHUNK)
         .map(|chunk| {
-            let mut shared: std::collections::BTreeMap<(usize, usize), f64> = Default::default();
+            let mut shared: BTreeMap<(usize, usize), f64> = Default::default();
             if stop.load(AtomicOrdering::Relaxed) {
                 return shared;
             }
@@ -665,6 +633,111 @@ fn adjacency(
         .map(|(pair, _)| pair)
         .collect();
     Some(pairs)
+}
+
+/// The time, in seconds, one unit of the adjacency's work takes per boundary edge (see
+/// [`adjacency`]): 0.03 s a million edges, on the US states at 10⁶ vertices.
+const SECONDS_PER_EDGE: f64 = 0.03e-6;
+
+/// Regions whose boundary edges are collected per parallel task of [`boundary_edges`].
+const REGIONS_PER_CHUNK: usize = 64;
+
+/// The rings of `region`, each shell before its holes.
+fn rings_of_region(region: &MultiPolygon<f64>) -> impl Iterator<Item = &LineString<f64>> {
+    (region.0.iter()).flat_map(|p| std::iter::once(p.exterior()).chain(p.interiors()))
+}
+
+/// The boundary edges of the `members`, region by region in that order and each ring's in its
+/// order. Collected in parallel into their places, since at 10⁷ vertices this alone took a third
+/// of a second; `go_on` hears the share collected; `None` once it has returned false.
+fn boundary_edges(
+    regions: &[&MultiPolygon<f64>],
+    members: &[usize],
+    go_on: &(dyn Fn(f64) -> bool + Sync),
+) -> Option<Vec<Edge>> {
+    let counts: Vec<usize> = members.iter().map(|&r| vertex_count(regions[r])).collect();
+    let total: usize = counts.iter().sum();
+    let blank = Edge {
+        a: Coord::zero(),
+        b: Coord::zero(),
+        region: 0,
+    };
+    let mut edges = vec![blank; total];
+    let mut places: Vec<(usize, &mut [Edge])> = Vec::with_capacity(members.len());
+    let mut rest = edges.as_mut_slice();
+    for (&region, &count) in members.iter().zip(&counts) {
+        let (place, tail) = std::mem::take(&mut rest).split_at_mut(count);
+        places.push((region, place));
+        rest = tail;
+    }
+    let (done, stop) = (AtomicUsize::new(0), AtomicBool::new(false));
+    places.par_chunks_mut(REGIONS_PER_CHUNK).for_each(|chunk| {
+        if stop.load(AtomicOrdering::Relaxed) {
+            return;
+        }
+        let mut count = 0;
+        for (region, place) in chunk.iter_mut() {
+            let lines = rings_of_region(regions[*region]).flat_map(|ring| ring.lines());
+            for (edge, line) in place.iter_mut().zip(lines) {
+                *edge = Edge {
+                    a: line.start,
+                    b: line.end,
+                    region: *region,
+                };
+            }
+            count += place.len();
+        }
+        let before = done.fetch_add(count, AtomicOrdering::Relaxed);
+        if !go_on((before + count) as f64 / total.max(1) as f64) {
+            stop.store(true, AtomicOrdering::Relaxed);
+        }
+    });
+    (!stop.into_inner()).then_some(edges)
+}
+
+/// Borders two regions have vertex for vertex (a topologically built layer shares every inner
+/// border so) are shared along their whole length: found by sorting, not searching, which is
+/// what keeps millions of vertices fast. Returns the length each pair of regions shares so, and
+/// the edges no other region has, left to search for borders that run along each other within
+/// the tolerance, in the boundaries' order.
+fn shared_vertex_for_vertex(edges: Vec<Edge>) -> (BTreeMap<(usize, usize), f64>, Vec<Edge>) {
+    let key = |e: &Edge| {
+        let (p, q) = if (e.a.x, e.a.y) <= (e.b.x, e.b.y) {
+            (e.a, e.b)
+        } else {
+            (e.b, e.a)
+        };
+        // + 0.0 turns −0 into 0, which must match.
+        [p.x, p.y, q.x, q.y].map(|v| (v + 0.0).to_bits())
+    };
+    let mut keyed: Vec<([u64; 4], usize, usize)> = (edges.par_iter().enumerate())
+        .map(|(k, e)| (key(e), e.region, k))
+        .collect();
+    keyed.par_sort_unstable();
+    let mut shared: BTreeMap<(usize, usize), f64> = Default::default();
+    // Per edge, whether it is left to search.
+    let mut rest = vec![false; edges.len()];
+    for group in keyed.chunk_by(|a, b| a.0 == b.0) {
+        let mut owners: Vec<usize> = group.iter().map(|g| g.1).collect();
+        owners.dedup();
+        if owners.len() == 1 {
+            for g in group {
+                rest[g.2] = true;
+            }
+            continue;
+        }
+        let e = &edges[group[0].2];
+        let length = (e.b - e.a).x.hypot((e.b - e.a).y);
+        for (k, &i) in owners.iter().enumerate() {
+            for &j in &owners[k + 1..] {
+                *shared.entry((i, j)).or_default() += length;
+            }
+        }
+    }
+    let searched = (edges.into_iter().zip(rest))
+        .filter_map(|(e, r)| r.then_some(e))
+        .collect();
+    (shared, searched)
 }
 
 fn touches(e: &Edge, f: &Edge, reach: f64) -> bool {
@@ -767,8 +840,8 @@ fn clusters(regions: &[&MultiPolygon<f64>], reach: f64) -> Vec<Vec<usize>> {
     groups.into_values().collect()
 }
 
-/// The union of all regions, group by group (in parallel), since only regions of one group can
-/// meet. Parts come as the polygon overlay writes them, ordered by their lowest vertex (the
+/// The union of all regions, cluster by cluster, since only regions of one cluster can meet;
+/// `None` once `go_on`, asked as the overlay runs ([`watch::watched`]), has returned false. Parts come as the polygon overlay writes them, ordered by their lowest vertex (the
 /// overlay's order): the simplification keeps each ring's first vertex and later steps number
 /// the parts, so both follow from the geometry alone. geo's union reads the winding of the first
 /// ring as the rule for all, and layers in the wild mix windings (Shapefile rings run
@@ -777,8 +850,9 @@ fn merge(
     regions: &[&MultiPolygon<f64>],
     valid_here: &[bool],
     clusters: &[Vec<usize>],
-) -> MultiPolygon<f64> {
-    let parts: Vec<Vec<Polygon<f64>>> = clusters
+    go_on: impl FnMut(f64) -> bool,
+) -> Option<MultiPolygon<f64>> {
+    let overlays: Vec<(Vec<Polygon<f64>>, Given)> = clusters
         .par_iter()
         .map(|group| {
             let oriented: Vec<Polygon<f64>> = (group.iter())
@@ -790,10 +864,16 @@ fn merge(
                 [_] => Given::Region,
                 _ => Given::Regions,
             };
-            overlay::union(&oriented, given)
+            (oriented, given)
         })
         .collect();
-    by_lowest_vertex(parts.into_iter().flatten())
+    let union = move || {
+        let parts: Vec<Vec<Polygon<f64>>> = (overlays.par_iter())
+            .map(|(polygons, given)| overlay::union(polygons, *given))
+            .collect();
+        by_lowest_vertex(parts.into_iter().flatten())
+    };
+    watch::watched(union, go_on)
 }
 
 /// `parts` ordered by their lowest (x, then y) vertex, as the overlay writes them.
@@ -918,9 +998,9 @@ fn without_slivers(part: Polygon<f64>) -> Polygon<f64> {
     Polygon::new(exterior, holes)
 }
 
+/// The vertices of `p`'s rings, each counted once: also the number of its boundary edges.
 fn vertex_count(p: &MultiPolygon<f64>) -> usize {
-    p.0.iter()
-        .flat_map(|poly| std::iter::once(poly.exterior()).chain(poly.interiors()))
+    rings_of_region(p)
         .map(|ring| ring.0.len().saturating_sub(1))
         .sum()
 }
@@ -952,6 +1032,9 @@ fn simplify(
     // pass is 0.6–0.9 of it where the simplification takes long (the world's coasts, the star),
     // less where it does not (0.2 on the US counties: 0.07 s; BENCHMARKS.md "Progress").
     let thinned = thin(union, 0.1 * finest.sqrt());
+    if !heard(0.05) {
+        return None;
+    }
     let fine = visvalingam(&thinned, finest, &|share| heard(0.05 + 0.8 * share))?;
     let fine = close_gaps(fine);
     if !heard(0.9) {
@@ -1045,9 +1128,7 @@ const LEAST_TOLERANCE: f64 = 1e-9;
 /// tolerance at once, where a bisection ran the simplification some 35 times (most of the
 /// outline's time on a boundary of long, detailed spikes).
 fn tolerance_for(polygons: &MultiPolygon<f64>, target: usize) -> f64 {
-    let rings =
-        (polygons.0.iter()).flat_map(|p| std::iter::once(p.exterior()).chain(p.interiors()));
-    let mut levels: Vec<f64> = rings
+    let mut levels: Vec<f64> = rings_of_region(polygons)
         .flat_map(|r| Removals::until(r, f64::INFINITY, &mut |_| true))
         .flat_map(|removals| removals.levels)
         .collect();
@@ -1503,7 +1584,7 @@ mod tests {
     fn overlaps_are_measured_and_one_pair_named() {
         let side_by_side = [square(0.0, 0.0), square(1.0, 0.0)];
         let refs: Vec<&MultiPolygon<f64>> = side_by_side.iter().collect();
-        let union = merge(&refs, &[true, true], &[vec![0, 1]]);
+        let union = merge(&refs, &[true, true], &[vec![0, 1]], |_| true).unwrap();
         assert_eq!(overlaps(&refs, &union), None);
         // A 0.6 × 0.6 square drawn over the first: 0.36 of 2.36 counted twice (hand count).
         let small = MultiPolygon(vec![
@@ -1511,7 +1592,7 @@ mod tests {
         ]);
         let stacked = [square(0.0, 0.0), square(1.0, 0.0), small];
         let refs: Vec<&MultiPolygon<f64>> = stacked.iter().collect();
-        let union = merge(&refs, &[true, true, true], &[vec![0, 1, 2]]);
+        let union = merge(&refs, &[true, true, true], &[vec![0, 1, 2]], |_| true).unwrap();
         let (share, pair) = overlaps(&refs, &union).expect("an overlap");
         assert!((share - 0.36 / 2.36).abs() < 1e-9, "{share}");
         let (i, j) = pair.expect("a pair");
@@ -1693,6 +1774,50 @@ mod tests {
                 "outline",
             ]
         );
+    }
+
+    #[test]
+    fn boundary_edges_come_in_the_boundaries_order_and_stop_when_told() {
+        // Three chunks of regions, one with a hole: the edges as a plain walk gives them.
+        let regions: Vec<MultiPolygon<f64>> = (0..150)
+            .map(|k| {
+                let mut region = square((k % 15) as f64, (k / 15) as f64);
+                if k == 70 {
+                    let hole = geo::LineString::from(vec![
+                        (7.4, 4.4),
+                        (7.4, 4.6),
+                        (7.6, 4.6),
+                        (7.6, 4.4),
+                        (7.4, 4.4),
+                    ]);
+                    region.0[0].interiors_push(hole);
+                }
+                region
+            })
+            .collect();
+        let refs: Vec<&MultiPolygon<f64>> = regions.iter().collect();
+        let members: Vec<usize> = (0..150).rev().collect();
+        let walked: Vec<(Coord<f64>, Coord<f64>, usize)> = (members.iter())
+            .flat_map(|&k| {
+                rings_of_region(refs[k])
+                    .flat_map(move |r| r.lines().map(move |l| (l.start, l.end, k)))
+            })
+            .collect();
+        let shares = Mutex::new(Vec::new());
+        let edges = boundary_edges(&refs, &members, &|share| {
+            shares.lock().unwrap().push(share);
+            true
+        })
+        .expect("not stopped");
+        let collected: Vec<_> = edges.iter().map(|e| (e.a, e.b, e.region)).collect();
+        assert_eq!(collected, walked);
+        assert_eq!(walked.len(), 150 * 4 + 4);
+        // One report per chunk of 64 regions, the last at the whole.
+        let mut shares = shares.into_inner().unwrap();
+        shares.sort_by(f64::total_cmp);
+        assert_eq!(shares.len(), 3);
+        assert_eq!(shares.last(), Some(&1.0));
+        assert!(boundary_edges(&refs, &members, &|_| false).is_none());
     }
 
     #[test]
