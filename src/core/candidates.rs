@@ -17,6 +17,7 @@ use super::snake::{self, SnakeRun};
 use super::thin;
 use super::tiling::{Position, Tiling};
 use super::validity::{self, Problem};
+use super::watch;
 use super::{
     assign, forces, geometry, rank, refine, CandidateReport, Error, GridMap, LayoutMetrics, Params,
     Progress, Region, RegionCell, RegionMetrics,
@@ -42,6 +43,10 @@ use std::sync::{Arc, Mutex};
 /// distances, areas, the triangulation) loses all precision or overflows, e.g. for a
 /// needle-thin region 1e231 units long.
 const MAX_SPAN: f64 = 1e6;
+/// Vertices of a region above which its repair runs watched, so that a cancel is heard within
+/// it: a repair of a few thousand vertices takes hundredths of a second, not worth a thread
+/// pool of its own, while one crowded star of 20,000 took 0.44 s.
+const WATCHED_REPAIR: usize = 5_000;
 
 /// The largest coordinate taken: the squares of coordinates and the areas of rings stay far
 /// from overflow (1e300 squared is infinite, and the layer would seem to have no area).
@@ -667,10 +672,20 @@ fn check(regions: &[Region], checking: &(dyn Fn(f64) -> bool + Sync)) -> Result<
             valid_here[i] = valid;
         }
     }
+    // A repair asks whether to go on as the checking's end (once told to stop, it does not
+    // ask again).
+    let stop = AtomicBool::new(false);
+    let go_on = || {
+        let go = !stop.load(Ordering::Relaxed) && checking(1.0);
+        if !go {
+            stop.store(true, Ordering::Relaxed);
+        }
+        go
+    };
     let checked = first_error_in_order((regions.par_iter().zip(&valid_here)).map(
         |(region, &valid)| {
             if !valid {
-                return repaired(region);
+                return repaired(region, &go_on);
             }
             if !has_area(&region.geometry) {
                 return Err(Error::input(Some(&region.id), "the polygon has no area"));
@@ -743,8 +758,12 @@ fn admit(region: &Region) -> Result<(), Error> {
 }
 
 /// An admitted region's geometry checked in the layer's coordinates, repaired if it is invalid
-/// there (with what was wrong).
-fn repaired(region: &Region) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Problem>), Error> {
+/// there (with what was wrong). A repair of more than [`WATCHED_REPAIR`] vertices runs watched
+/// ([`watch::watched`]), asking `go_on`; [`Error::Cancelled`] once it has returned false.
+fn repaired<'r>(
+    region: &'r Region,
+    go_on: &(dyn Fn() -> bool + Sync),
+) -> Result<(Cow<'r, MultiPolygon<f64>>, Option<Problem>), Error> {
     let id = region.id.as_str();
     let examined = validity::examine(&region.geometry);
     let Some(problem) = examined.problem else {
@@ -758,16 +777,29 @@ fn repaired(region: &Region) -> Result<(Cow<'_, MultiPolygon<f64>>, Option<Probl
     // on boundaries as drawn: Greenland at 98,906 vertices in 0.03 s, where `MakeValid` took
     // 4–8 s, splitting its rings at pinch points in O(n²). Among crowded long segments (a star's
     // spikes) the overlay's sweep grows faster still, so those keep `MakeValid`.
-    let repaired = if examined.crowded {
-        region.geometry.make_valid().map_err(|e| {
-            Error::input(
-                Some(id),
-                format!("the polygon is invalid ({problem}) and cannot be repaired: {e}"),
-            )
-        })?
-    } else {
-        (region.geometry).union_with_fill_rule(&MultiPolygon::new(Vec::new()), FillRule::EvenOdd)
+    let crowded = examined.crowded;
+    let repair = move |geometry: &MultiPolygon<f64>| {
+        if crowded {
+            geometry.make_valid().map_err(|e| e.to_string())
+        } else {
+            let none = MultiPolygon::new(Vec::new());
+            Ok(geometry.union_with_fill_rule(&none, FillRule::EvenOdd))
+        }
     };
+    // Either is one call that cannot stop: seconds on a large region (35 s on a crowded star
+    // of 200,000 vertices crossing itself).
+    let repaired = if region.geometry.coords_count() > WATCHED_REPAIR {
+        let geometry = region.geometry.clone();
+        watch::watched(move || repair(&geometry), |_| go_on()).ok_or(Error::Cancelled)?
+    } else {
+        repair(&region.geometry)
+    };
+    let repaired = repaired.map_err(|e| {
+        Error::input(
+            Some(id),
+            format!("the polygon is invalid ({problem}) and cannot be repaired: {e}"),
+        )
+    })?;
     let repaired = canonical(repaired);
     if !has_area(&repaired) {
         return Err(Error::input(
@@ -1674,6 +1706,41 @@ mod tests {
     }
 
     #[test]
+    fn a_long_repair_hears_a_cancel() {
+        // A star of 6,000 vertices (over `WATCHED_REPAIR`) whose ring crosses itself where two
+        // of its tips are swapped.
+        let mut tips: Vec<(f64, f64)> = (0..6000)
+            .map(|k| {
+                let (r, a) = (if k % 2 == 0 { 10.0 } else { 6.0 }, k as f64 / 6000.0);
+                let a = a * std::f64::consts::TAU;
+                (r * a.cos(), r * a.sin())
+            })
+            .collect();
+        tips.swap(1000, 1003);
+        let star = Region {
+            id: "star".into(),
+            geometry: MultiPolygon(vec![Polygon::new(LineString::from(tips), vec![])]),
+            group: None,
+            pin: None,
+        };
+        assert!(validity::problem(&star.geometry).is_some());
+        // The check reports its end; the repair asks at the check's end again, and is told to
+        // stop.
+        let heard = Mutex::new(Vec::new());
+        let result = generate(&[star], &Params::default(), &|fraction, message| {
+            let mut heard = heard.lock().unwrap();
+            let again = heard.last() == Some(&(fraction, message.to_owned()));
+            heard.push((fraction, message.to_owned()));
+            !(message == "checking geometry" && fraction > 0.0 && again)
+        });
+        assert_eq!(result.err(), Some(Error::Cancelled));
+        let heard = heard.into_inner().unwrap();
+        assert!(heard
+            .iter()
+            .all(|(_, message)| message == "checking geometry"));
+    }
+
+    #[test]
     fn of_two_bad_features_the_first_in_input_order_is_named_on_any_thread() {
         // 400 squares in a row, of which two are bad: a NaN corner, or flat (no area). A
         // sequential check meets feature 150 first; rayon's collect into a Result reported
@@ -1776,7 +1843,7 @@ mod tests {
         ] {
             let region = region(ring);
             assert!(!validity::examine(&region.geometry).crowded, "{name}");
-            let (ours, problem) = repaired(&region).unwrap();
+            let (ours, problem) = repaired(&region, &|| true).unwrap();
             assert!(problem.is_some(), "{name}");
             let theirs = region.geometry.make_valid().unwrap();
             let shape = |m: &MultiPolygon<f64>| {
@@ -1816,11 +1883,11 @@ mod tests {
             group: None,
             pin: None,
         };
-        let (first, problem) = repaired(&region).unwrap();
+        let (first, problem) = repaired(&region, &|| true).unwrap();
         assert!(problem.is_some());
         assert!(first.0.len() > 1, "{first:?}");
         for _ in 0..20 {
-            assert_eq!(repaired(&region).unwrap().0, first);
+            assert_eq!(repaired(&region, &|| true).unwrap().0, first);
         }
     }
 

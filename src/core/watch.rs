@@ -11,8 +11,8 @@ use std::time::{Duration, Instant};
 /// How often the host is asked while the work runs: well inside the 0.2 s a cancel may take.
 const EVERY: Duration = Duration::from_millis(20);
 
-/// `work`'s result, or `None` once `go_on` (asked every [`EVERY`] with the seconds since the
-/// work began) has returned false. The work runs on a thread pool of its own, as many threads
+/// `work`'s result, or `None` once `go_on` (asked as the work begins, then every [`EVERY`] with
+/// the seconds since it began) has returned false. The work runs on a thread pool of its own, as many threads
 /// as the caller's, so that it may work in parallel while the caller waits without taking a
 /// thread from its pool; a panic in it is raised here. If no pool can be started, the work runs
 /// here, unwatched. Once cancelled, the work runs on to its end in the background, holding what
@@ -22,6 +22,9 @@ pub fn watched<T: Send + 'static>(
     mut go_on: impl FnMut(f64) -> bool,
 ) -> Option<T> {
     let began = Instant::now();
+    if !go_on(0.0) {
+        return None;
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(rayon::current_num_threads())
         .thread_name(|k| format!("snakegrid-watched-{k}"))
@@ -77,6 +80,18 @@ mod tests {
         );
         assert_eq!(result, Some(42));
         assert!(asked.len() >= 3 && asked.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(asked[0], 0.0);
+    }
+
+    #[test]
+    fn work_told_to_stop_before_it_begins_is_not_begun() {
+        let begun = Arc::new(AtomicBool::new(false));
+        let flag = begun.clone();
+        assert_eq!(
+            watched(move || flag.store(true, Ordering::SeqCst), |_| false),
+            None
+        );
+        assert!(!begun.load(Ordering::SeqCst));
     }
 
     #[test]
@@ -85,12 +100,13 @@ mod tests {
         let (release, released) = mpsc::channel::<()>();
         let ended = Arc::new(AtomicBool::new(false));
         let flag = ended.clone();
+        // Begun, then told to stop at the first question while it runs.
         let result = watched(
             move || {
                 let _ = released.recv();
                 flag.store(true, Ordering::SeqCst);
             },
-            |_| false,
+            |seconds| seconds == 0.0,
         );
         assert_eq!(result, None);
         assert!(!ended.load(Ordering::SeqCst));
