@@ -790,7 +790,7 @@ fn repaired<'r>(
     // of 200,000 vertices crossing itself).
     let repaired = if region.geometry.coords_count() > WATCHED_REPAIR {
         let geometry = region.geometry.clone();
-        watch::watched(move || repair(&geometry), |_| go_on()).ok_or(Error::Cancelled)?
+        watch::watched(1, move || repair(&geometry), |_| go_on()).ok_or(Error::Cancelled)?
     } else {
         repair(&region.geometry)
     };

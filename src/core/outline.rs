@@ -560,6 +560,7 @@ fn adjacency(
         // host as time passes against the time expected for it.
         let expected = 4.0 * all * SECONDS_PER_EDGE;
         let (shared, searched) = watch::watched(
+            rayon::current_num_threads(),
             move || shared_vertex_for_vertex(edges),
             |seconds| {
                 let done = 1.0 - (-seconds / expected).exp();
@@ -873,7 +874,7 @@ fn merge(
             .collect();
         by_lowest_vertex(parts.into_iter().flatten())
     };
-    watch::watched(union, go_on)
+    watch::watched(rayon::current_num_threads(), union, go_on)
 }
 
 /// `parts` ordered by their lowest (x, then y) vertex, as the overlay writes them.

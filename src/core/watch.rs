@@ -12,12 +12,15 @@ use std::time::{Duration, Instant};
 const EVERY: Duration = Duration::from_millis(20);
 
 /// `work`'s result, or `None` once `go_on` (asked as the work begins, then every [`EVERY`] with
-/// the seconds since it began) has returned false. The work runs on a thread pool of its own, as many threads
-/// as the caller's, so that it may work in parallel while the caller waits without taking a
-/// thread from its pool; a panic in it is raised here. If no pool can be started, the work runs
-/// here, unwatched. Once cancelled, the work runs on to its end in the background, holding what
-/// it was given, and nothing waits for it.
+/// the seconds since it began) has returned false. The work runs on a thread pool of its own of
+/// `threads` threads (the caller's count for work that runs in parallel, one for work that does
+/// not: a host of many cores repairing many regions at once would otherwise start that many
+/// pools of that many threads), so that it may work in parallel while the caller waits without
+/// taking a thread from its pool; a panic in it is raised here. If no pool can be started, the
+/// work runs here, unwatched. Once cancelled, the work runs on to its end in the background,
+/// holding what it was given, and nothing waits for it.
 pub fn watched<T: Send + 'static>(
+    threads: usize,
     work: impl FnOnce() -> T + Send + 'static,
     mut go_on: impl FnMut(f64) -> bool,
 ) -> Option<T> {
@@ -26,7 +29,7 @@ pub fn watched<T: Send + 'static>(
         return None;
     }
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(rayon::current_num_threads())
+        .num_threads(threads.max(1))
         .thread_name(|k| format!("snakegrid-watched-{k}"))
         .build();
     let Ok(pool) = pool else {
@@ -66,6 +69,7 @@ mod tests {
         let (release, released) = mpsc::channel();
         let mut asked = Vec::new();
         let result = watched(
+            1,
             move || {
                 released.recv().unwrap();
                 42
@@ -88,7 +92,7 @@ mod tests {
         let begun = Arc::new(AtomicBool::new(false));
         let flag = begun.clone();
         assert_eq!(
-            watched(move || flag.store(true, Ordering::SeqCst), |_| false),
+            watched(1, move || flag.store(true, Ordering::SeqCst), |_| false),
             None
         );
         assert!(!begun.load(Ordering::SeqCst));
@@ -102,6 +106,7 @@ mod tests {
         let flag = ended.clone();
         // Begun, then told to stop at the first question while it runs.
         let result = watched(
+            1,
             move || {
                 let _ = released.recv();
                 flag.store(true, Ordering::SeqCst);
@@ -123,6 +128,7 @@ mod tests {
             .unwrap();
         let sum = pool.install(|| {
             watched(
+                rayon::current_num_threads(),
                 || {
                     use rayon::prelude::*;
                     (
@@ -138,7 +144,8 @@ mod tests {
 
     #[test]
     fn a_panic_in_the_work_is_raised_in_the_caller() {
-        let caught = std::panic::catch_unwind(|| watched(|| -> u8 { panic!("overlay") }, |_| true));
+        let caught =
+            std::panic::catch_unwind(|| watched(1, || -> u8 { panic!("overlay") }, |_| true));
         let message = caught.expect_err("the panic reaches the caller");
         assert_eq!(message.downcast_ref::<&str>(), Some(&"overlay"));
     }
