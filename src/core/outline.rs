@@ -112,7 +112,8 @@ pub struct Prepared {
 /// `reached` hears the share of the work done as the costly stages (the adjacency, union and
 /// simplification, side by side, most of it on dense boundaries) go, from any thread; `None`
 /// once it has returned false (cancelled). The adjacency stops within a chunk of its search
-/// and the other side between its stages; the union, one overlay, ends first.
+/// and the other side between its stages; the two calls that cannot stop (the union's overlay,
+/// the sort of the borders) are left to end in the background ([`watch::watched`]).
 pub fn prepare(
     regions: &[&MultiPolygon<f64>],
     drawn: &[&MultiPolygon<f64>],
@@ -842,9 +843,10 @@ fn clusters(regions: &[&MultiPolygon<f64>], reach: f64) -> Vec<Vec<usize>> {
 }
 
 /// The union of all regions, cluster by cluster, since only regions of one cluster can meet;
-/// `None` once `go_on`, asked as the overlay runs ([`watch::watched`]), has returned false. Parts come as the polygon overlay writes them, ordered by their lowest vertex (the
-/// overlay's order): the simplification keeps each ring's first vertex and later steps number
-/// the parts, so both follow from the geometry alone. geo's union reads the winding of the first
+/// `None` once `go_on`, asked as the overlay runs ([`watch::watched`]), has returned false.
+/// Parts come as the polygon overlay writes them, ordered by their lowest vertex (the overlay's
+/// order): the simplification keeps each ring's first vertex and later steps number the parts,
+/// so both follow from the geometry alone. geo's union reads the winding of the first
 /// ring as the rule for all, and layers in the wild mix windings (Shapefile rings run
 /// clockwise), so every polygon is oriented first.
 fn merge(
