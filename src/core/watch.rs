@@ -1,8 +1,9 @@
 //! Work that cannot stop itself, watched from outside so that the host is still heard. One call
-//! of geo's polygon overlay (the outline's union) or of its repair runs to its end: seconds on
-//! a boundary of 10⁷ vertices, tens of seconds on a star crowded with crossings. Run on a thread
-//! of its own, it leaves the caller free to keep asking the host whether to go on; on a cancel
-//! the caller returns at once and the thread's result, when it comes, is dropped.
+//! of geo's polygon overlay (the outline's union, a region's repair) or one parallel sort (the
+//! borders regions share) runs to its end: seconds at 10⁷ vertices, tens of seconds on a star
+//! crowded with crossings. Run on a thread pool of its own, it leaves the caller free to keep
+//! asking the host whether to go on; on a cancel the caller returns at once and the work's
+//! result, when it comes, is dropped.
 
 use std::panic::{self, AssertUnwindSafe};
 use std::sync::mpsc::{self, RecvTimeoutError};
