@@ -29,9 +29,19 @@ pub fn watched<T: Send + 'static>(
     if !go_on(0.0) {
         return None;
     }
+    // The pool's threads, joined once the work has ended: a thread still ending when the host
+    // exits holds what it allocated (valgrind counts crossbeam's per-thread state as lost).
+    let mut started = Vec::new();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
-        .thread_name(|k| format!("snakegrid-watched-{k}"))
+        .spawn_handler(|thread| {
+            let name = format!("snakegrid-watched-{}", thread.index());
+            let handle = std::thread::Builder::new()
+                .name(name)
+                .spawn(|| thread.run())?;
+            started.push(handle);
+            Ok(())
+        })
         .build();
     let Ok(pool) = pool else {
         return Some(work());
@@ -44,8 +54,14 @@ pub fn watched<T: Send + 'static>(
     });
     loop {
         match receiver.recv_timeout(EVERY) {
-            Ok(Ok(result)) => return Some(result),
-            Ok(Err(raised)) => panic::resume_unwind(raised),
+            Ok(ended) => {
+                // Idle now: dropping the pool ends its threads at once.
+                drop(pool);
+                for thread in started {
+                    let _ = thread.join();
+                }
+                return Some(ended.unwrap_or_else(|raised| panic::resume_unwind(raised)));
+            }
             Err(RecvTimeoutError::Timeout) => {
                 if !go_on(began.elapsed().as_secs_f64()) {
                     return None;
