@@ -149,7 +149,7 @@ pub fn prepare(
             // the host as time passes against the time expected for it.
             let expected = stages.expected_seconds(Stage::Union);
             let regions_union = merge(regions, valid_here, &clusters, |seconds| {
-                stages.advanced(Stage::Union, 1.0 - (-seconds / expected).exp())
+                stages.advanced(Stage::Union, watch::expected_share(seconds, expected))
             })?;
             // Each of the next two is a tenth of a second on a union of 3.5 million vertices
             // (the US states at 10⁷): the host is asked between them, the share held.
@@ -564,7 +564,7 @@ fn adjacency(
             rayon::current_num_threads(),
             move || shared_vertex_for_vertex(edges),
             |seconds| {
-                let done = 1.0 - (-seconds / expected).exp();
+                let done = watch::expected_share(seconds, expected);
                 reached(share((1.0 + 4.0 * done) * all, all))
             },
         )?;

@@ -74,6 +74,13 @@ pub fn watched<T: Send + 'static>(
     }
 }
 
+/// The share of a watched call taken as done `seconds` into it, when it is expected to take
+/// `expected` seconds: 1 − e^(−t/T), which never reaches the end, so that a bar fed with it keeps
+/// moving when the call runs longer than expected, where a linear share would stop.
+pub fn expected_share(seconds: f64, expected: f64) -> f64 {
+    1.0 - (-seconds / expected).exp()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
