@@ -44,6 +44,13 @@
 #endif
 
 /**
+ * The largest angle one chord of a linearised arc spans: GDAL's default (`OGR_ARC_STEPSIZE`),
+ * so that a curved layer read here and one linearised by `ogr2ogr -nlt CONVERT_TO_LINEAR`
+ * differ by less than the outline's tolerance.
+ */
+#define snakegrid_ARC_STEP_DEGREES 4.0
+
+/**
  * How far, in cells, a cell's centre may lie from the position its numbers name and still
  * count as where the layout put it (the re-layout issue's figure).
  */
@@ -670,9 +677,10 @@ void snakegrid_regions_free(struct snakegrid_regions *regions);
 
 /**
  * Adds one region: a unique, non-empty UTF-8 `id` and its geometry as `wkb_len` bytes of WKB,
- * a Polygon, a MultiPolygon or a GeometryCollection of only those, in either byte order (ISO
- * or EWKB; Z and M are ignored). The bytes are copied; the caller keeps ownership of `id` and
- * `wkb`.
+ * a Polygon, a MultiPolygon or a GeometryCollection of only those, or a CurvePolygon or
+ * MultiSurface (its arcs linearised in chords of at most 4 degrees, as GDAL does), in either
+ * byte order (ISO or EWKB; Z and M are ignored). The bytes are copied; the caller keeps
+ * ownership of `id` and `wkb`.
  *
  * Fails with SNAKEGRID_INVALID_INPUT, naming the region, for malformed WKB or another geometry
  * type; the handle is then unchanged. The regions as a whole (unique ids, geometries with
@@ -690,7 +698,8 @@ snakegrid_status snakegrid_regions_add(struct snakegrid_regions *regions,
  * `feature` names it until its id is known (e.g. "FID 3"), `id` is its id (NULL: a null id),
  * `wkb` its geometry as `wkb_len` bytes (NULL: a null geometry). A null or empty id, an id
  * already added by this function, and a geometry that is not a (non-empty) Polygon,
- * MultiPolygon or GeometryCollection of them are refused with SNAKEGRID_INVALID_INPUT and the
+ * MultiPolygon or GeometryCollection of them, or a curved polygon (linearised, and the run's
+ * notes say so), are refused with SNAKEGRID_INVALID_INPUT and the
  * command line's message, e.g. "feature FID 3: the id is null" or "feature p1: the geometry is
  * a POINT, not a polygon or multipolygon"; the handle is then unchanged. Hosts that read layers themselves (QGIS,
  * Python) use this so that users see what the command line would say.

@@ -1,8 +1,10 @@
 //! Well-Known Binary in and out, for callers that hand regions over as bytes (the C API) rather
 //! than as `geo` types. Parsing and writing are the georust `wkb` crate's; this module only
 //! decides what a region may be: a Polygon, a MultiPolygon or a GeometryCollection of them
-//! ([`crate::input::polygons_of`]), read in 2D (Z and M are dropped,
-//! as the method is planar).
+//! ([`crate::input::polygons_of`]), or a curved surface, linearised ([`curved`]); read in 2D
+//! (Z and M are dropped, as the method is planar).
+
+pub mod curved;
 
 use crate::input::{polygons_of, GeometryKind};
 use geo::{MultiPolygon, Polygon};
@@ -16,6 +18,27 @@ use wkb::Endianness;
 /// buffer must be one geometry. The error says what is wrong, not which region: the caller
 /// knows that.
 pub fn to_multi_polygon(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
+    match type_code(bytes) {
+        Some(code) if curved::curved_name(code).is_some() => curved::to_multi_polygon(bytes),
+        // A collection the straight reader refuses may hold curved polygons.
+        Some(code) if curved::base_code(code) == 7 => {
+            straight(bytes).or_else(|e| curved::to_multi_polygon(bytes).map_err(|_| e))
+        }
+        _ => straight(bytes),
+    }
+}
+
+/// The WKB type code in the header of `bytes`, in their byte order.
+fn type_code(bytes: &[u8]) -> Option<u32> {
+    match bytes {
+        [0, a, b, c, d, ..] => Some(u32::from_be_bytes([*a, *b, *c, *d])),
+        [1, a, b, c, d, ..] => Some(u32::from_le_bytes([*a, *b, *c, *d])),
+        _ => None,
+    }
+}
+
+/// Reads a geometry without curves, with the `wkb` crate.
+fn straight(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
     let geometry = Wkb::try_new(bytes).map_err(|e| format!("invalid WKB: {e}"))?;
     // The reader stops at the end of the first geometry; anything after it means the caller
     // passed the wrong length or several geometries.
@@ -43,33 +66,30 @@ pub fn to_multi_polygon(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
 /// What kind of geometry `bytes` hold, for the input checks every face shares
 /// ([`crate::input::Admission`]); the names are the OGC ones GDAL prints ("POINT").
 pub fn geometry_kind(bytes: &[u8]) -> Result<GeometryKind<'static>, String> {
+    let code = type_code(bytes);
     if let Ok(geometry) = to_multi_polygon(bytes) {
         let empty = geometry.0.iter().all(|p| p.exterior().0.is_empty());
-        return Ok(if empty {
-            GeometryKind::Empty
-        } else {
-            GeometryKind::Polygonal
+        return Ok(match code.and_then(curved::curved_name) {
+            _ if empty => GeometryKind::Empty,
+            Some(name) => GeometryKind::Curved(name),
+            None => GeometryKind::Polygonal,
         });
     }
     // Not a polygon the reader takes: name the type from the header (byte order, then the type
     // code, ISO with Z/M in the thousands or EWKB with flags in the high bits), as a reader of
-    // curves or points would.
-    let code = match bytes {
-        [0, a, b, c, d, ..] => u32::from_be_bytes([*a, *b, *c, *d]),
-        [1, a, b, c, d, ..] => u32::from_le_bytes([*a, *b, *c, *d]),
-        _ => return Err(to_multi_polygon(bytes).unwrap_err()),
+    // points would.
+    let Some(code) = code else {
+        return Err(to_multi_polygon(bytes).unwrap_err());
     };
-    let name = match (code & 0x0fff_ffff) % 1000 {
+    let name = match curved::base_code(code) {
         1 => "POINT",
         2 => "LINESTRING",
         4 => "MULTIPOINT",
         5 => "MULTILINESTRING",
         7 => "GEOMETRYCOLLECTION",
-        8 => return Ok(GeometryKind::Curved("CIRCULARSTRING")),
-        9 => return Ok(GeometryKind::Curved("COMPOUNDCURVE")),
-        10 => return Ok(GeometryKind::Curved("CURVEPOLYGON")),
-        11 => return Ok(GeometryKind::Curved("MULTICURVE")),
-        12 => return Ok(GeometryKind::Curved("MULTISURFACE")),
+        8 => "CIRCULARSTRING",
+        9 => "COMPOUNDCURVE",
+        11 => "MULTICURVE",
         15 => "POLYHEDRALSURFACE",
         16 => "TIN",
         17 => "TRIANGLE",
@@ -189,12 +209,29 @@ mod tests {
         point.extend(1.0f64.to_le_bytes());
         point.extend(2.0f64.to_le_bytes());
         assert_eq!(geometry_kind(&point), Ok(GeometryKind::Other("POINT")));
-        // A big-endian CurvePolygon with Z (ISO 1010) is curved, whatever follows.
+        // A big-endian CurvePolygon with Z (ISO 1010), one ring: a full circle.
         let mut curved = vec![0u8];
         curved.extend(1010u32.to_be_bytes());
+        curved.extend(1u32.to_be_bytes());
+        curved.push(0);
+        curved.extend(1008u32.to_be_bytes());
+        curved.extend(3u32.to_be_bytes());
+        for v in [0.0f64, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0] {
+            curved.extend(v.to_be_bytes());
+        }
         assert_eq!(
             geometry_kind(&curved),
             Ok(GeometryKind::Curved("CURVEPOLYGON"))
+        );
+        // Cut short, it is an error; a curve that bounds nothing is named.
+        let err = geometry_kind(&curved[..20]).unwrap_err();
+        assert!(err.starts_with("invalid WKB"), "{err}");
+        let mut arc = vec![1u8];
+        arc.extend(8u32.to_le_bytes());
+        arc.extend(0u32.to_le_bytes());
+        assert_eq!(
+            geometry_kind(&arc),
+            Ok(GeometryKind::Other("CIRCULARSTRING"))
         );
         let mut empty = vec![1u8];
         empty.extend(3u32.to_le_bytes());

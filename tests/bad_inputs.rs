@@ -77,11 +77,12 @@ fn every_case_through_the_library() {
                 common::assert_valid_grid(&source.regions, &map);
                 common::assert_ids_and_order_do_not_matter(&source.regions, &Params::default());
                 if let Some(text) = &case.text {
+                    // The reading's notes (curves, CRS) and the layout's (repairs).
+                    let notes: Vec<&String> = source.notes.iter().chain(&map.notes).collect();
                     assert!(
-                        map.notes.iter().any(|n| n.contains(text.as_str())),
-                        "{}: no note holds {text:?}: {:?}",
+                        notes.iter().any(|n| n.contains(text.as_str())),
+                        "{}: no note holds {text:?}: {notes:?}",
                         case.file,
-                        map.notes
                     );
                 }
             }

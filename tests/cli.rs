@@ -1526,3 +1526,51 @@ fn a_layer_round_a_pole_is_laid_out_round_the_pole() {
     let (_, rows) = read_rows(&dst);
     assert_eq!(assert_grid(&rows, "code").len(), 24);
 }
+
+#[test]
+fn curved_regions_are_linearised_and_keep_their_neighbours() {
+    // Three rings of eight sectors about the origin, each sector a CurvePolygon whose inner and
+    // outer edges are arcs, every arc shared with the sector across it (drawn the other way).
+    let scratch = Scratch::new("curved");
+    let src = scratch.path("sectors.gpkg");
+    let point = |r: f64, a: f64| format!("{} {}", 1000.0 * r * a.cos(), 1000.0 * r * a.sin());
+    let mut rows = Vec::new();
+    for ring in 0..3 {
+        let (inner, outer) = (1.0 + ring as f64, 2.0 + ring as f64);
+        for sector in 0..8 {
+            let step = std::f64::consts::TAU / 8.0;
+            let (a0, a1) = (step * sector as f64, step * (sector + 1) as f64);
+            let am = (a0 + a1) / 2.0;
+            let wkt = format!(
+                "CURVEPOLYGON(COMPOUNDCURVE(CIRCULARSTRING({},{},{}),({},{}),\
+                 CIRCULARSTRING({},{},{}),({},{})))",
+                point(outer, a0),
+                point(outer, am),
+                point(outer, a1),
+                point(outer, a1),
+                point(inner, a1),
+                point(inner, a1),
+                point(inner, am),
+                point(inner, a0),
+                point(inner, a0),
+                point(outer, a0),
+            );
+            rows.push((format!("r{ring}s{sector}"), wkt));
+        }
+    }
+    write_regions(&src, 3857, &rows);
+    let (dst, report) = (scratch.path("grid.gpkg"), scratch.path("grid.json"));
+    let output = snakegrid(["-id", "code", "-json", p(&report), p(&dst), p(&src)]);
+    assert_success(&output);
+    let summary = stdout(&output);
+    assert!(
+        summary.contains("feature r0s0 and 23 others: curved geometry (CURVEPOLYGON) linearised"),
+        "{summary}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    // By hand: 8 pairs round each of the 3 rings, 8 across each of the 2 circles between them.
+    assert_eq!(report["adjacent_pairs"], 40, "{summary}");
+    let (_, rows) = read_rows(&dst);
+    assert_eq!(assert_grid(&rows, "code").len(), 24);
+}

@@ -6,6 +6,11 @@ use super::Error;
 use geo::{Geometry, MultiPolygon};
 use std::collections::HashMap;
 
+/// The largest angle one chord of a linearised arc spans: GDAL's default (`OGR_ARC_STEPSIZE`),
+/// so that a curved layer read here and one linearised by `ogr2ogr -nlt CONVERT_TO_LINEAR`
+/// differ by less than the outline's tolerance.
+pub const ARC_STEP_DEGREES: f64 = 4.0;
+
 /// What a reader found as a feature's geometry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GeometryKind<'a> {
@@ -16,17 +21,20 @@ pub enum GeometryKind<'a> {
     /// A polygon or multipolygon, or a collection of nothing else ([`polygons_of`]): what the
     /// method takes.
     Polygonal,
-    /// A curved geometry (its type name, e.g. "CURVEPOLYGON"), which must be linearised first.
+    /// A curved polygon (its type name, e.g. "CURVEPOLYGON"): taken, its arcs linearised by
+    /// the reader (chords of at most [`ARC_STEP_DEGREES`]).
     Curved(&'a str),
     /// Any other geometry type (its name, e.g. "POINT").
     Other(&'a str),
 }
 
-/// The features admitted so far, to refuse a second use of an id.
+/// The features admitted so far, to refuse a second use of an id and to tell of curves.
 #[derive(Clone, Debug, Default)]
 pub struct Admission {
     /// Each id and the feature that used it first.
     seen: HashMap<String, String>,
+    /// The first feature with a curved geometry, its type, and how many there are.
+    curved: Option<(String, String, usize)>,
 }
 
 impl Admission {
@@ -50,13 +58,9 @@ impl Admission {
             ));
         }
         let problem = match geometry {
-            GeometryKind::Polygonal => None,
+            GeometryKind::Polygonal | GeometryKind::Curved(_) => None,
             GeometryKind::Null => Some("the geometry is null".to_owned()),
             GeometryKind::Empty => Some("the geometry is empty".to_owned()),
-            GeometryKind::Curved(name) => Some(format!(
-                "curved geometries ({name}) are not supported; linearise them first \
-                 (ogr2ogr -nlt CONVERT_TO_LINEAR, or QGIS's Segmentize by maximum angle)"
-            )),
             GeometryKind::Other(name) if name.starts_with("GEOMETRYCOLLECTION") => Some(format!(
                 "the geometry is a {name} that holds more than polygons"
             )),
@@ -67,8 +71,27 @@ impl Admission {
         if let Some(problem) = problem {
             return Err(Error::input(Some(id), problem));
         }
+        if let GeometryKind::Curved(name) = geometry {
+            let first = (id.to_owned(), name.to_owned(), 0);
+            self.curved.get_or_insert(first).2 += 1;
+        }
         self.seen.insert(id.to_owned(), feature.to_owned());
         Ok(id.to_owned())
+    }
+
+    /// What the user should know of the features admitted: that curves were linearised.
+    pub fn note(&self) -> Option<String> {
+        let (id, name, count) = self.curved.as_ref()?;
+        let others = match count - 1 {
+            0 => String::new(),
+            1 => " and 1 other".to_owned(),
+            n => format!(" and {n} others"),
+        };
+        Some(format!(
+            "feature {id}{others}: curved geometry ({name}) linearised, each arc cut into \
+             chords of at most {} degrees",
+            ARC_STEP_DEGREES
+        ))
     }
 }
 
@@ -159,12 +182,6 @@ mod tests {
                 GeometryKind::Other("POINT"),
                 "feature d: the geometry is a POINT",
             ),
-            (
-                "FID 8",
-                Some("e"),
-                GeometryKind::Curved("CURVEPOLYGON"),
-                "curved geometries (CURVEPOLYGON)",
-            ),
         ];
         for (feature, id, kind, message) in refused {
             let err = admission.admit(feature, id, kind).unwrap_err().to_string();
@@ -172,5 +189,27 @@ mod tests {
         }
         // A refused feature does not take its id.
         assert_eq!(admission.admit("FID 9", Some("b"), polygon).unwrap(), "b");
+    }
+
+    #[test]
+    fn curved_features_are_taken_and_told_of_once() {
+        let mut admission = Admission::default();
+        assert_eq!(admission.note(), None);
+        let curved = GeometryKind::Curved("CURVEPOLYGON");
+        admission.admit("FID 1", Some("a"), curved).unwrap();
+        let note = admission.note().unwrap();
+        assert!(
+            note.starts_with("feature a: curved geometry (CURVEPOLYGON)"),
+            "{note}"
+        );
+        admission
+            .admit("FID 2", Some("b"), GeometryKind::Polygonal)
+            .unwrap();
+        admission
+            .admit("FID 3", Some("c"), GeometryKind::Curved("MULTISURFACE"))
+            .unwrap();
+        admission.admit("FID 4", Some("d"), curved).unwrap();
+        let note = admission.note().unwrap();
+        assert!(note.starts_with("feature a and 2 others: curved"), "{note}");
     }
 }

@@ -22,6 +22,12 @@ pub(crate) struct RegionList {
 }
 
 impl RegionList {
+    /// What the user should know of the features added by snakegrid_regions_add_feature():
+    /// that curves were linearised.
+    pub(crate) fn note(&self) -> Option<String> {
+        self.admission.note()
+    }
+
     /// Region `index`, or the error for an index past the last.
     fn region_mut(&mut self, index: usize) -> Result<&mut Region, Failure> {
         let count = self.regions.len();
@@ -73,9 +79,10 @@ pub unsafe extern "C" fn snakegrid_regions_free(regions: *mut Regions) {
 }
 
 /// Adds one region: a unique, non-empty UTF-8 `id` and its geometry as `wkb_len` bytes of WKB,
-/// a Polygon, a MultiPolygon or a GeometryCollection of only those, in either byte order (ISO
-/// or EWKB; Z and M are ignored). The bytes are copied; the caller keeps ownership of `id` and
-/// `wkb`.
+/// a Polygon, a MultiPolygon or a GeometryCollection of only those, or a CurvePolygon or
+/// MultiSurface (its arcs linearised in chords of at most 4 degrees, as GDAL does), in either
+/// byte order (ISO or EWKB; Z and M are ignored). The bytes are copied; the caller keeps
+/// ownership of `id` and `wkb`.
 ///
 /// Fails with SNAKEGRID_INVALID_INPUT, naming the region, for malformed WKB or another geometry
 /// type; the handle is then unchanged. The regions as a whole (unique ids, geometries with
@@ -112,7 +119,8 @@ pub unsafe extern "C" fn snakegrid_regions_add(
 /// `feature` names it until its id is known (e.g. "FID 3"), `id` is its id (NULL: a null id),
 /// `wkb` its geometry as `wkb_len` bytes (NULL: a null geometry). A null or empty id, an id
 /// already added by this function, and a geometry that is not a (non-empty) Polygon,
-/// MultiPolygon or GeometryCollection of them are refused with SNAKEGRID_INVALID_INPUT and the
+/// MultiPolygon or GeometryCollection of them, or a curved polygon (linearised, and the run's
+/// notes say so), are refused with SNAKEGRID_INVALID_INPUT and the
 /// command line's message, e.g. "feature FID 3: the id is null" or "feature p1: the geometry is
 /// a POINT, not a polygon or multipolygon"; the handle is then unchanged. Hosts that read layers themselves (QGIS,
 /// Python) use this so that users see what the command line would say.

@@ -107,8 +107,9 @@ pub unsafe extern "C" fn snakegrid_run(
             )
         };
         let map = with_progress(progress, user_data, |p| crate::generate(list, params, p))?;
-        // In memory there is no I/O to report on: the notes are the core's (repaired polygons).
-        let notes = map.notes.clone();
+        // In memory there is no I/O to report on: the notes are the admission's (curves
+        // linearised) and the core's (repaired polygons).
+        let notes: Vec<String> = list.note().into_iter().chain(map.notes.clone()).collect();
         out.write(handle::into_raw::<RunResult>(Output::new(map, &notes)));
         Ok(())
     })

@@ -543,7 +543,8 @@ impl<'l> Source<'l> {
             group: group_field,
             pin,
         };
-        let checked = read::check(&features, &setting_fields, going)?;
+        let (checked, admission_note) = read::check(&features, &setting_fields, going)?;
+        notes.extend(admission_note);
         // Read as drawn only when the working-CRS rule needs the extents.
         let drawn = std::cell::OnceCell::new();
         let drawn_once = || drawn.get_or_init(|| read::drawn(&checked));

@@ -212,15 +212,16 @@ pub(crate) struct SettingFields {
 /// Ids, labels, groups, pins and polygonal geometries of `features`: each is admitted by the
 /// rules every face shares ([`Admission`]: null, empty or repeated ids, null, empty or
 /// non-polygonal geometries, each refused naming the feature); pins that are not whole numbers
-/// or given by halves are refused too ([`crate::pins::pin_of`]).
+/// or given by halves are refused too ([`crate::pins::pin_of`]). Curved polygons come back
+/// linearised, with the admission's note saying so.
 pub(crate) fn check(
     features: &[Feature],
     fields: &SettingFields,
     going: &Going,
-) -> Result<Vec<Checked>, Error> {
+) -> Result<(Vec<Checked>, Option<String>), Error> {
     let (id_field, label_field, group_field) = (fields.id, fields.label, fields.group);
     let mut admission = Admission::default();
-    features
+    let checked = features
         .iter()
         .enumerate()
         .map(|(k, feature)| {
@@ -240,10 +241,22 @@ pub(crate) fn check(
             };
             let geometry = usable(feature.geometry());
             let name = geometry.map(|g| g.geometry_name()).unwrap_or_default();
-            let id = admission.admit(&fid, id.as_deref(), kind(geometry, &name))?;
-            let geometry = geometry
+            let kind = kind(geometry, &name);
+            let id = admission.admit(&fid, id.as_deref(), kind)?;
+            let mut geometry = geometry
                 .map(flat_copy)
                 .ok_or_else(|| Error::Internal("an admitted geometry is null".into()))?;
+            if let GeometryKind::Curved(_) = kind {
+                // Linearised as every face does it, before any projection.
+                geometry = (geometry.wkb().ok())
+                    .ok_or_else(|| "GDAL cannot write it as WKB".to_owned())
+                    .and_then(|bytes| crate::wkb::to_multi_polygon(&bytes))
+                    .and_then(|linear| {
+                        Geometry::from_wkb(&crate::wkb::from_multi_polygon(&linear))
+                            .map_err(|e| e.to_string())
+                    })
+                    .map_err(|m| Error::input(Some(&id), m))?;
+            }
             let label = label_field
                 .and_then(|i| feature.field_as_string(i).ok().flatten())
                 .filter(|l| !l.trim().is_empty())
@@ -265,7 +278,8 @@ pub(crate) fn check(
                 geometry,
             })
         })
-        .collect()
+        .collect::<Result<Vec<Checked>, Error>>()?;
+    Ok((checked, admission.note()))
 }
 
 /// Field `index` of `feature` as a number: `None` when null or blank; a text field's value

@@ -182,10 +182,24 @@ static void test_in_memory_geometry(const snakegrid_options *options) {
     /* Refused features took nothing: "nothing" may still come, once. */
     wkb_buffer other = wkb_square(1, 0, 1);
     CHECK_OK(snakegrid_regions_add_feature(regions, "FID 8", "nothing", other.bytes, other.len));
+    /* A curved polygon is taken, linearised: CURVEPOLYGON(CIRCULARSTRING(2 0.5, 3 0.5, 2 0.5)),
+       the disc of radius 0.5 touching "nothing" at (2, 0.5). */
+    wkb_buffer disc = {{0}, 0};
+    wkb_header(&disc, 10);
+    wkb_u32(&disc, 1);
+    wkb_header(&disc, 8);
+    wkb_u32(&disc, 3);
+    const double arc[3][2] = {{2, 0.5}, {3, 0.5}, {2, 0.5}};
+    for (int i = 0; i < 3; i++) {
+        wkb_f64(&disc, arc[i][0]);
+        wkb_f64(&disc, arc[i][1]);
+    }
+    CHECK_OK(snakegrid_regions_add_feature(regions, "FID 9", "disc", disc.bytes, disc.len));
     CHECK_OK(snakegrid_run(regions, options, NULL, NULL, &result));
     size_t admitted = 0;
     CHECK_OK(snakegrid_result_count(result, &admitted));
-    CHECK(admitted == 2);
+    CHECK(admitted == 3);
+    CHECK(has_note(result, "feature disc: curved geometry (CURVEPOLYGON) linearised"));
     snakegrid_result_free(result);
     snakegrid_regions_free(regions);
 }

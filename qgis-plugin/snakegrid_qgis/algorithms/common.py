@@ -246,9 +246,11 @@ def working_crs(sg, features, target, feedback):
 
 
 def _polygons(geometry):
-    """Whether the library reads `geometry` (the layout refuses others by name)."""
-    return QgsWkbTypes.flatType(geometry.wkbType()) in (QgsWkbTypes.Polygon,
-                                                         QgsWkbTypes.MultiPolygon)
+    """Whether the library reads `geometry` (the layout refuses others by name); it
+    linearises curved polygons itself, as the command line does."""
+    return QgsWkbTypes.flatType(geometry.wkbType()) in (
+        QgsWkbTypes.Polygon, QgsWkbTypes.MultiPolygon, QgsWkbTypes.CurvePolygon,
+        QgsWkbTypes.MultiSurface)
 
 
 def _box(rectangle):
