@@ -69,7 +69,14 @@ pub fn geometry_kind(bytes: &[u8]) -> Result<GeometryKind<'static>, String> {
     let code = type_code(bytes);
     if let Ok(geometry) = to_multi_polygon(bytes) {
         let empty = geometry.0.iter().all(|p| p.exterior().0.is_empty());
-        return Ok(match code.and_then(curved::curved_name) {
+        // Curved: a curved type, or a collection only the curves' reader takes.
+        let curved = code.and_then(|code| {
+            curved::curved_name(code).or_else(|| {
+                (curved::base_code(code) == 7 && straight(bytes).is_err())
+                    .then_some("GEOMETRYCOLLECTION")
+            })
+        });
+        return Ok(match curved {
             _ if empty => GeometryKind::Empty,
             Some(name) => GeometryKind::Curved(name),
             None => GeometryKind::Polygonal,
@@ -223,6 +230,17 @@ mod tests {
             geometry_kind(&curved),
             Ok(GeometryKind::Curved("CURVEPOLYGON"))
         );
+        // A collection holding it is curved too, and read whole.
+        let mut collection = vec![1u8];
+        collection.extend(7u32.to_le_bytes());
+        collection.extend(2u32.to_le_bytes());
+        collection.extend(&curved);
+        collection.extend(from_polygon(&square()));
+        assert_eq!(
+            geometry_kind(&collection),
+            Ok(GeometryKind::Curved("GEOMETRYCOLLECTION"))
+        );
+        assert_eq!(to_multi_polygon(&collection).unwrap().0.len(), 2);
         // Cut short, it is an error; a curve that bounds nothing is named.
         let err = geometry_kind(&curved[..20]).unwrap_err();
         assert!(err.starts_with("invalid WKB"), "{err}");

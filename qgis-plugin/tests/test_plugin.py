@@ -516,6 +516,16 @@ def test_the_library_notes_are_logged(qgis_app):
     assert any("feature bowtie: invalid polygon repaired" in line for line in log.lines)
 
 
+def test_curved_polygons_are_linearised_as_the_command_line_does(qgis_app, tmp_path):
+    source = os.path.join(BAD, "curved.csv")
+    expected = layout(cli(str(tmp_path / "cli.gpkg"), source), "id")
+    log = Log()
+    result = run("gridmap", INPUT=source, ID_FIELD="id", OUTPUT="memory:", feedback=log)
+    assert layout(result["OUTPUT"]) == expected
+    assert any("feature a: curved geometry (CURVEPOLYGON) linearised" in line
+               for line in log.lines)
+
+
 def test_metrics_rescore_the_layout_and_see_an_edit(us_run):
     grid = us_run["OUTPUT"]
     scored = run("gridmetrics", REGIONS=US_STATES, REGION_ID="id", GRID=grid,

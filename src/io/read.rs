@@ -4,7 +4,7 @@
 use super::session::Session;
 use crate::core::{Error, Progress, Region};
 use crate::crs::LonLatBox;
-use crate::input::{polygons_of, Admission, GeometryKind};
+use crate::input::{Admission, GeometryKind};
 use gdal::spatial_ref::CoordTransform;
 use gdal::vector::{Feature, FieldValue, Geometry, Layer, LayerAccess, OGRwkbGeometryType};
 use gdal::{Dataset, DatasetOptions, GdalOpenFlags};
@@ -317,11 +317,11 @@ fn kind<'n>(geometry: Option<&Geometry>, name: &'n str) -> GeometryKind<'n> {
         OGRwkbGeometryType::wkbPolygon | OGRwkbGeometryType::wkbMultiPolygon => {
             GeometryKind::Polygonal
         }
-        OGRwkbGeometryType::wkbGeometryCollection
-            if geometry.to_geo().ok().and_then(polygons_of).is_some() =>
-        {
-            GeometryKind::Polygonal
-        }
+        // A collection is judged as every face judges its WKB (it may hold curved polygons).
+        OGRwkbGeometryType::wkbGeometryCollection => (geometry.wkb().ok())
+            .and_then(|bytes| crate::wkb::geometry_kind(&bytes).ok())
+            .filter(|kind| matches!(kind, GeometryKind::Polygonal | GeometryKind::Curved(_)))
+            .unwrap_or(GeometryKind::Other(name)),
         OGRwkbGeometryType::wkbCurvePolygon | OGRwkbGeometryType::wkbMultiSurface => {
             GeometryKind::Curved(name)
         }
