@@ -192,9 +192,8 @@ def bad_cases():
     with open(os.path.join(BAD, "cases.tsv"), encoding="utf-8") as f:
         rows = [r for r in csv.reader(f, delimiter="\t") if r and not r[0].startswith("#")]
     # GDAL's C API hands the command line GeoJSON's empty coordinates as a null geometry,
-    # pyogrio as an empty one: the library names each as it is given, so the texts differ. And
-    # shapely has no curves, so pyogrio cannot hand the host a curved geometry at all.
-    skipped = {"empty_geometry.geojson", "curved.csv"}
+    # pyogrio as an empty one: the library names each as it is given, so the texts differ.
+    skipped = {"empty_geometry.geojson"}
     return [r for r in rows if r[2] == "invalid_input" and r[1] != "-" and r[0] not in skipped]
 
 
