@@ -776,7 +776,9 @@ void snakegrid_job_free(struct snakegrid_job *job);
  * - "pin_col_field", "pin_row_field": fields holding each pinned region's cell, column and row
  *   (whole numbers; null: free), both or neither; with pins, grid_col and grid_row are
  *   numbered in the pins' frame (method.md §10);
- * - "dst": destination dataset path; required;
+ * - "dst": destination dataset path; required; "/vsistdout/" (with "format") sends the
+ *   dataset to the process's standard output once the run has succeeded, as one of
+ *   "json_report", "svg" or "hexjson" may instead;
  * - "format": GDAL driver short name (default: from the extension, refused when no
  *   driver writes it; GPKG without one);
  * - "layer_name": output layer name (default: the source layer's);

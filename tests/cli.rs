@@ -461,12 +461,10 @@ fn outputs_that_would_mislead_or_hang_are_refused_before_any_work() {
         1,
         "does not exist",
     );
-    // GDAL's virtual file systems, as outputs: said so, not "the folder does not exist" (or,
-    // for /vsistdout/, that it "already exists").
-    for virtual_path in ["/vsistdout/", "/vsimem/grid.gpkg"] {
-        let to_virtual = snakegrid(["-q", "-f", "GeoJSON", virtual_path, p(&src)]);
-        assert_fails(&to_virtual, 1, "GDAL's virtual file systems");
-    }
+    // GDAL's virtual file systems but standard output, as outputs: said so, not "the folder
+    // does not exist".
+    let to_virtual = snakegrid(["-q", "-f", "GeoJSON", "/vsimem/grid.gpkg", p(&src)]);
+    assert_fails(&to_virtual, 1, "GDAL's virtual file systems");
     // Opening a named pipe waits for a writer: as source or destination it is refused, not a
     // hang.
     let fifo = scratch.path("pipe");
@@ -1573,4 +1571,67 @@ fn curved_regions_are_linearised_and_keep_their_neighbours() {
     assert_eq!(report["adjacent_pairs"], 40, "{summary}");
     let (_, rows) = read_rows(&dst);
     assert_eq!(assert_grid(&rows, "code").len(), 24);
+}
+
+/// The command, its temporary files kept in `tmp`.
+fn snakegrid_in_tmp(tmp: &Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_snakegrid"))
+        .env("TMPDIR", tmp)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn standard_output_takes_one_output_once_the_run_has_succeeded() {
+    let scratch = Scratch::new("stdout");
+    let src = scratch.input("us_states");
+    let tmp = scratch.path("tmp");
+    std::fs::create_dir(&tmp).unwrap();
+    // The grid layer as GeoJSON on standard output, the summary on standard error.
+    let grid = snakegrid_in_tmp(
+        &tmp,
+        &["-f", "GeoJSON", "-id", "id", "/vsistdout/", p(&src)],
+    );
+    assert_success(&grid);
+    let collection: serde_json::Value = serde_json::from_slice(&grid.stdout).unwrap();
+    let features = collection["features"].as_array().unwrap();
+    // The 48 contiguous states and DC (the data README).
+    assert_eq!(features.len(), 49);
+    assert!(features[0]["properties"]["grid_col"].is_i64());
+    assert!(stderr(&grid).contains("49 regions from layer us_states → /vsistdout/"));
+    // The JSON report there, the grid in a file.
+    let dst = scratch.path("grid.gpkg");
+    let report = snakegrid_in_tmp(&tmp, &["-q", "-json", "/vsistdout/", p(&dst), p(&src)]);
+    assert_success(&report);
+    let report: serde_json::Value = serde_json::from_slice(&report.stdout).unwrap();
+    assert_eq!(report["destination"]["dataset"], p(&dst));
+    assert_eq!(read_rows(&dst).1.len(), 49);
+    // Refused before any work, each with nothing on standard output.
+    let refused = [
+        (vec!["/vsistdout/"], "give -f"),
+        (
+            vec!["-f", "ESRI Shapefile", "/vsistdout/"],
+            "writes a dataset of 3 files",
+        ),
+        (
+            vec!["-f", "GeoJSON", "-json", "/vsistdout/", "/vsistdout/"],
+            "only one can",
+        ),
+        (vec!["-f", "GeoJSON", "-update", "/vsistdout/"], "-update"),
+        // A failed run sends nothing.
+        (
+            vec!["-f", "GeoJSON", "-where", "abbr = 'ZZ'", "/vsistdout/"],
+            "-where",
+        ),
+    ];
+    for (args, message) in refused {
+        let mut args = args.clone();
+        args.push(p(&src));
+        let output = snakegrid_in_tmp(&tmp, &args);
+        assert_fails(&output, 1, message);
+        assert!(output.stdout.is_empty(), "{args:?}");
+    }
+    // Every temporary folder is gone.
+    assert_eq!(std::fs::read_dir(&tmp).unwrap().count(), 0);
 }

@@ -22,7 +22,7 @@ use std::sync::{Arc, Mutex};
 #[derive(Parser, Debug)]
 #[command(name = "snakegrid", color = ColorChoice::Never, max_term_width = 100)]
 struct Cli {
-    /// Destination dataset, a file or folder (must not exist, unless -overwrite)
+    /// Destination dataset, a file or folder (must not exist, unless -overwrite); /vsistdout/ (with -f) sends it to standard output once the run has succeeded
     #[arg(value_name = "DST")]
     dst: String,
     /// Source dataset: file, folder or connection string
@@ -425,7 +425,13 @@ fn main() -> ExitCode {
     match result {
         Ok(outcome) => {
             if !quiet {
-                print!("{}", io::summary(&job, &outcome));
+                let summary = io::summary(&job, &outcome);
+                // Standard output may carry an output itself (/vsistdout/).
+                if io::sends_to_stdout(&job) {
+                    eprint!("{summary}");
+                } else {
+                    print!("{summary}");
+                }
             }
             ExitCode::SUCCESS
         }

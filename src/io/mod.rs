@@ -26,8 +26,11 @@ mod readback;
 mod report;
 mod session;
 mod staging;
+mod stdout;
 mod svg;
 mod write;
+
+pub use stdout::{sends_to_stdout, STDOUT};
 
 pub use report::summary;
 
@@ -127,6 +130,10 @@ fn run_in(
     }
     let driver = write::driver(job.format.as_deref(), &job.dst)?;
     let format = driver.short_name();
+    // An output at /vsistdout/ is made in a temporary folder, and sent once the run succeeds.
+    let asked = job;
+    let (redirected, stream) = stdout::redirect(job, &driver)?;
+    let job = &redirected;
     let dataset = read::open(session, &job.src)?;
     let source_files = SourceFiles::of(&dataset, &job.src);
     let outputs = outputs(job);
@@ -167,6 +174,14 @@ fn run_in(
         file_name,
     };
     let fields = trial.fields(layer.defn())?;
+    if stream.as_ref().is_some_and(|s| s.is_destination()) && fields.files > 1 {
+        return Err(Error::Io(format!(
+            "the {format} format writes a dataset of {} files, which cannot go to standard \
+             output ({STDOUT}) as one stream; give a format of one file (e.g. -f GeoJSON, \
+             -f FlatGeobuf, -f CSV)",
+            fields.files
+        )));
+    }
     let mode = Mode::of(job.update, job.overwrite);
     let destination = Destination::dataset(
         session,
@@ -291,7 +306,8 @@ fn run_in(
                 .and_then(|text| serde_json::from_str(&text).ok()),
             projected: plan.transform.is_some(),
         };
-        let text = report::json(job, params, &outcome, source, crs, &labels)?;
+        // The report names the outputs as asked (/vsistdout/ too).
+        let text = report::json(asked, params, &outcome, source, crs, &labels)?;
         staged.push(stage_text("JSON report", json, staging, &text)?);
     }
     if let Some((svg, staging)) = svg_staging {
@@ -310,6 +326,9 @@ fn run_in(
     step(1.0, "moving the outputs into place")?;
     commit::commit(staged, job.overwrite, &source_files)?;
     // Too late to cancel: the outputs are in place.
+    if let Some(stream) = stream {
+        stream.send()?;
+    }
     progress(1.0, "done");
     Ok(outcome)
 }
@@ -604,16 +623,17 @@ fn outputs(job: &Job) -> Vec<(&'static str, &str)> {
         .collect()
 }
 
-/// Refuses an output in one of GDAL's virtual file systems (`/vsistdout/`, `/vsizip/`,
-/// `/vsimem/`, …), which the run cannot make beside and then rename into place: the message
-/// says so, where the folder checks would call `/vsistdout/` a file that exists.
+/// Refuses an output in one of GDAL's virtual file systems (`/vsizip/`, `/vsimem/`, …), which
+/// the run cannot make beside and then rename into place: the message says so, where the
+/// folder checks would call it a folder that does not exist. Standard output (`/vsistdout/`)
+/// is made in a temporary folder and sent once complete ([`stdout`]).
 fn on_disk(outputs: &[(&str, &str)]) -> Result<(), Error> {
     match (outputs.iter()).find(|(_, path)| path.starts_with("/vsi")) {
         Some((what, path)) => Err(Error::Io(format!(
             "the {what} {path:?} is in one of GDAL's virtual file systems, which snakegrid does \
              not write to: every output is made beside its path and renamed into place once \
-             complete, so that a failed run leaves nothing half-written; write a file and copy \
-             it (snakegrid out.geojson SRC && cat out.geojson)"
+             complete, so that a failed run leaves nothing half-written; write a file, or to \
+             standard output ({STDOUT}, with -f)"
         ))),
         None => Ok(()),
     }

@@ -16,6 +16,7 @@
 //! the output would merge or change (a DBF drops trailing spaces, keeps at most 254 bytes and
 //! recodes to its encoding) are refused before the layout.
 
+use super::paths::file_list;
 use super::readback::{can_read, read_back, Expected};
 use super::session::Session;
 use super::write::{self, computed_fields, Container, LayerSpec, OutputField, Row};
@@ -50,6 +51,9 @@ pub(crate) struct Fields {
     pub notes: Vec<String>,
     /// The driver can add a layer to a file it wrote and delete one from it.
     pub layers_in_place: bool,
+    /// How many files the driver wrote the dataset as (a Shapefile's `.shp`, `.shx`, `.dbf`,
+    /// …): a dataset sent to standard output must be one.
+    pub files: usize,
 }
 
 /// The name a source field called `name` is written under so as not to take a computed
@@ -132,7 +136,8 @@ impl Trial<'_> {
         // Each pass renames at least one more source field, so there are at most as many passes
         // as computed fields, plus the one that finds nothing more to rename.
         for _ in 0..=OUTPUT_FIELDS.len() {
-            let (stored, layers_in_place) = self.try_layer(&fields, &[("", &blank)], None)?;
+            let (stored, layers_in_place, files) =
+                self.try_layer(&fields, &[("", &blank)], None)?;
             let (kept, added) = stored.split_at(fields.len());
             let clash = computed_fields()
                 .zip(added)
@@ -163,6 +168,7 @@ impl Trial<'_> {
                     stored,
                     notes,
                     layers_in_place,
+                    files,
                 });
             };
             // The source field that took the computed field's name, once the driver named it.
@@ -204,13 +210,14 @@ impl Trial<'_> {
 
     /// Writes the layer with `fields` and `features` into a fresh folder of `/vsimem/`, reads it
     /// back (the ids too when `id_position` is given), and returns the names the driver gave
-    /// every field and whether it can add and delete layers in the file it wrote.
+    /// every field, whether it can add and delete layers in the file it wrote, and how many
+    /// files it wrote.
     fn try_layer(
         &self,
         fields: &[OutputField],
         features: &[(&str, &Feature)],
         id_position: Option<usize>,
-    ) -> Result<(Vec<String>, bool), Error> {
+    ) -> Result<(Vec<String>, bool, usize), Error> {
         // GDAL's warnings about the trial (unknown options, values cut) come again, about the
         // real output, when the run writes it.
         let warnings = self.session.warning_count();
@@ -236,7 +243,7 @@ impl Trial<'_> {
         fields: &[OutputField],
         features: &[(&str, &Feature)],
         id_position: Option<usize>,
-    ) -> Result<(Vec<String>, bool), Error> {
+    ) -> Result<(Vec<String>, bool, usize), Error> {
         let path = folder.0.join(self.file_name);
         let square: Polygon<f64> =
             polygon![(x: 0.0, y: 0.0), (x: 1.0, y: 0.0), (x: 1.0, y: 1.0), (x: 0.0, y: 1.0)];
@@ -277,7 +284,8 @@ impl Trial<'_> {
         if can_read(self.driver) {
             read_back(self.session, &path, &expected)?;
         }
-        Ok((written.fields, layers_in_place(&path)))
+        let files = Dataset::open(&path).map_or(1, |dataset| file_list(&dataset).len().max(1));
+        Ok((written.fields, layers_in_place(&path), files))
     }
 }
 
