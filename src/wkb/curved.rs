@@ -37,7 +37,11 @@ pub fn curved_name(code: u32) -> Option<&'static str> {
 /// The polygons of a curved surface, or of a collection holding one, linearised; Z and M are
 /// dropped. `Err` says what the bytes hold instead.
 pub fn to_multi_polygon(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
-    let mut reader = Reader { bytes, at: 0 };
+    let mut reader = Reader {
+        bytes,
+        at: 0,
+        depth: 0,
+    };
     let mut polygons = Vec::new();
     reader.surfaces(&mut polygons)?;
     if reader.at != bytes.len() {
@@ -66,9 +70,31 @@ struct Header {
 struct Reader<'a> {
     bytes: &'a [u8],
     at: usize,
+    /// How many collections and compound curves hold the one being read.
+    depth: usize,
 }
 
+/// The deepest nesting read, as the `wkb` crate reads straight geometries: a few bytes per
+/// level would otherwise recurse until the stack overflows.
+const MAX_DEPTH: usize = 128;
+
 impl Reader<'_> {
+    /// Reads what `read` reads one level deeper, refused past [`MAX_DEPTH`].
+    fn nested<T>(
+        &mut self,
+        read: impl FnOnce(&mut Self) -> Result<T, String>,
+    ) -> Result<T, String> {
+        if self.depth >= MAX_DEPTH {
+            return Err(format!(
+                "invalid WKB: geometries nested more than {MAX_DEPTH} deep"
+            ));
+        }
+        self.depth += 1;
+        let read = read(self);
+        self.depth -= 1;
+        read
+    }
+
     fn take<const N: usize>(&mut self) -> Result<[u8; N], String> {
         let end = self.at + N;
         let taken = (self.bytes.get(self.at..end))
@@ -167,7 +193,7 @@ impl Reader<'_> {
             }
             MULTI_POLYGON | MULTI_SURFACE | COLLECTION => {
                 for _ in 0..self.count(header.little_endian, 9)? {
-                    self.surfaces(out)?;
+                    self.nested(|reader| reader.surfaces(out))?;
                 }
             }
             other => {
@@ -204,7 +230,7 @@ impl Reader<'_> {
             COMPOUND_CURVE => {
                 let mut line: Vec<Coord<f64>> = Vec::new();
                 for _ in 0..self.count(header.little_endian, 9)? {
-                    let part = self.curve()?;
+                    let part = self.nested(Reader::curve)?;
                     // Each part starts where the last ended.
                     let skip = usize::from(line.last().is_some() && line.last() == part.first());
                     line.extend(part.into_iter().skip(skip));
@@ -509,6 +535,29 @@ mod tests {
         huge.extend(u32::MAX.to_le_bytes());
         let err = to_multi_polygon(&huge).unwrap_err();
         assert!(err.contains("cannot fit"), "{err}");
+    }
+
+    #[test]
+    fn nesting_is_refused_past_the_straight_readers_depth() {
+        // 200,000 multisurfaces one inside the next: refused, not a stack overflow.
+        let mut bytes = Vec::new();
+        for _ in 0..200_000 {
+            bytes.extend(header(MULTI_SURFACE));
+            bytes.extend(1u32.to_le_bytes());
+        }
+        bytes.extend(header(MULTI_SURFACE));
+        bytes.extend(0u32.to_le_bytes());
+        let err = to_multi_polygon(&bytes).unwrap_err();
+        assert!(err.contains("nested more than 128 deep"), "{err}");
+        // Compound curves inside compound curves too.
+        let mut ring = Vec::new();
+        for _ in 0..200_000 {
+            ring.extend(header(COMPOUND_CURVE));
+            ring.extend(1u32.to_le_bytes());
+        }
+        ring.extend(with_points(LINE_STRING, &[(0.0, 0.0)]));
+        let err = to_multi_polygon(&with_parts(CURVE_POLYGON, &[ring])).unwrap_err();
+        assert!(err.contains("nested more than 128 deep"), "{err}");
     }
 
     #[test]
