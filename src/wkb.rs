@@ -216,16 +216,7 @@ mod tests {
         point.extend(1.0f64.to_le_bytes());
         point.extend(2.0f64.to_le_bytes());
         assert_eq!(geometry_kind(&point), Ok(GeometryKind::Other("POINT")));
-        // A big-endian CurvePolygon with Z (ISO 1010), one ring: a full circle.
-        let mut curved = vec![0u8];
-        curved.extend(1010u32.to_be_bytes());
-        curved.extend(1u32.to_be_bytes());
-        curved.push(0);
-        curved.extend(1008u32.to_be_bytes());
-        curved.extend(3u32.to_be_bytes());
-        for v in [0.0f64, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0] {
-            curved.extend(v.to_be_bytes());
-        }
+        let curved = curved::big_endian_circle_z();
         assert_eq!(
             geometry_kind(&curved),
             Ok(GeometryKind::Curved("CURVEPOLYGON"))

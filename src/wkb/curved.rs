@@ -355,6 +355,24 @@ fn centre(a: Coord<f64>, b: Coord<f64>, c: Coord<f64>) -> Option<Coord<f64>> {
     })
 }
 
+/// CURVEPOLYGON Z (ISO 1010), big-endian, whose ring is a CIRCULARSTRING Z (1008): the
+/// circle of radius 1 through (0, 0) and (2, 0), at z 5.
+#[cfg(test)]
+pub(crate) fn big_endian_circle_z() -> Vec<u8> {
+    let mut bytes = vec![0u8];
+    bytes.extend(1010u32.to_be_bytes());
+    bytes.extend(1u32.to_be_bytes());
+    bytes.push(0);
+    bytes.extend(1008u32.to_be_bytes());
+    bytes.extend(3u32.to_be_bytes());
+    for (x, y) in [(0.0f64, 0.0f64), (2.0, 0.0), (0.0, 0.0)] {
+        for v in [x, y, 5.0] {
+            bytes.extend(v.to_be_bytes());
+        }
+    }
+    bytes
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -479,17 +497,7 @@ mod tests {
         let mut bytes = vec![0u8];
         bytes.extend(1012u32.to_be_bytes());
         bytes.extend(2u32.to_be_bytes());
-        bytes.push(0);
-        bytes.extend(1010u32.to_be_bytes());
-        bytes.extend(1u32.to_be_bytes());
-        bytes.push(0);
-        bytes.extend(1008u32.to_be_bytes());
-        bytes.extend(3u32.to_be_bytes());
-        for (x, y) in [(0.0f64, 0.0f64), (2.0, 0.0), (0.0, 0.0)] {
-            for v in [x, y, 5.0] {
-                bytes.extend(v.to_be_bytes());
-            }
-        }
+        bytes.extend(big_endian_circle_z());
         bytes.push(1);
         bytes.extend((0x2000_0000u32 | 3).to_le_bytes());
         bytes.extend(4326u32.to_le_bytes());
