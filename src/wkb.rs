@@ -69,13 +69,16 @@ pub fn geometry_kind(bytes: &[u8]) -> Result<GeometryKind<'static>, String> {
     let code = type_code(bytes);
     if let Ok(geometry) = to_multi_polygon(bytes) {
         let empty = geometry.0.iter().all(|p| p.exterior().0.is_empty());
-        // Curved: a curved type, or a collection only the curves' reader takes.
-        let curved = code.and_then(|code| {
-            curved::curved_name(code).or_else(|| {
-                (curved::base_code(code) == 7 && straight(bytes).is_err())
-                    .then_some("GEOMETRYCOLLECTION")
+        // Curved: a curved type, or a collection only the curves' reader takes, that holds an
+        // arc (a MultiSurface of plain polygons is not).
+        let curved = code
+            .and_then(|code| {
+                curved::curved_name(code).or_else(|| {
+                    (curved::base_code(code) == 7 && straight(bytes).is_err())
+                        .then_some("GEOMETRYCOLLECTION")
+                })
             })
-        });
+            .filter(|_| curved::read(bytes).is_ok_and(|(_, arcs)| arcs > 0));
         return Ok(match curved {
             _ if empty => GeometryKind::Empty,
             Some(name) => GeometryKind::Curved(name),
@@ -232,6 +235,16 @@ mod tests {
             Ok(GeometryKind::Curved("GEOMETRYCOLLECTION"))
         );
         assert_eq!(to_multi_polygon(&collection).unwrap().0.len(), 2);
+        // A MultiSurface of plain polygons (as GML readers hand them over) is no curve.
+        let mut plain = vec![1u8];
+        plain.extend(12u32.to_le_bytes());
+        plain.extend(1u32.to_le_bytes());
+        plain.extend(from_polygon(&square()));
+        assert_eq!(geometry_kind(&plain), Ok(GeometryKind::Polygonal));
+        assert_eq!(
+            to_multi_polygon(&plain).unwrap(),
+            MultiPolygon(vec![square()])
+        );
         // Cut short, it is an error; a curve that bounds nothing is named.
         let err = geometry_kind(&curved[..20]).unwrap_err();
         assert!(err.starts_with("invalid WKB"), "{err}");

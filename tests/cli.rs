@@ -1571,6 +1571,32 @@ fn curved_regions_are_linearised_and_keep_their_neighbours() {
     assert_eq!(report["adjacent_pairs"], 40, "{summary}");
     let (_, rows) = read_rows(&dst);
     assert_eq!(assert_grid(&rows, "code").len(), 24);
+
+    // MultiSurfaces of plain polygons, as GML readers hand them over, have nothing to
+    // linearise and no note says otherwise.
+    let plain_src = scratch.path("plain.gpkg");
+    let squares: Vec<(String, String)> = (0..4)
+        .map(|k| {
+            let (x, y) = (1000 * (k % 2), 1000 * (k / 2));
+            let ring = format!(
+                "{x} {y},{} {y},{} {},{x} {},{x} {y}",
+                x + 1000,
+                x + 1000,
+                y + 1000,
+                y + 1000
+            );
+            (format!("s{k}"), format!("MULTISURFACE((({ring})))"))
+        })
+        .collect();
+    write_regions(&plain_src, 3857, &squares);
+    let output = snakegrid([
+        "-id",
+        "code",
+        p(&scratch.path("plain_grid.gpkg")),
+        p(&plain_src),
+    ]);
+    assert_success(&output);
+    assert!(!stdout(&output).contains("curved geometry"), "{}", stdout(&output));
 }
 
 /// The command, its temporary files kept in `tmp`.

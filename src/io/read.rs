@@ -317,14 +317,14 @@ fn kind<'n>(geometry: Option<&Geometry>, name: &'n str) -> GeometryKind<'n> {
         OGRwkbGeometryType::wkbPolygon | OGRwkbGeometryType::wkbMultiPolygon => {
             GeometryKind::Polygonal
         }
-        // A collection is judged as every face judges its WKB (it may hold curved polygons).
-        OGRwkbGeometryType::wkbGeometryCollection => (geometry.wkb().ok())
+        // A collection, or a curved type, is judged as every face judges its WKB: a collection
+        // may hold curved polygons, a MultiSurface only plain ones.
+        OGRwkbGeometryType::wkbGeometryCollection
+        | OGRwkbGeometryType::wkbCurvePolygon
+        | OGRwkbGeometryType::wkbMultiSurface => (geometry.wkb().ok())
             .and_then(|bytes| crate::wkb::geometry_kind(&bytes).ok())
             .filter(|kind| matches!(kind, GeometryKind::Polygonal | GeometryKind::Curved(_)))
             .unwrap_or(GeometryKind::Other(name)),
-        OGRwkbGeometryType::wkbCurvePolygon | OGRwkbGeometryType::wkbMultiSurface => {
-            GeometryKind::Curved(name)
-        }
         _ => GeometryKind::Other(name),
     }
 }

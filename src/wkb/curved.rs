@@ -37,10 +37,17 @@ pub fn curved_name(code: u32) -> Option<&'static str> {
 /// The polygons of a curved surface, or of a collection holding one, linearised; Z and M are
 /// dropped. `Err` says what the bytes hold instead.
 pub fn to_multi_polygon(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
+    read(bytes).map(|(polygons, _)| polygons)
+}
+
+/// As [`to_multi_polygon`], with how many arcs were cut: none for a MultiSurface of plain
+/// polygons, as GML readers often hand them over.
+pub fn read(bytes: &[u8]) -> Result<(MultiPolygon<f64>, usize), String> {
     let mut reader = Reader {
         bytes,
         at: 0,
         depth: 0,
+        arcs: 0,
     };
     let mut polygons = Vec::new();
     reader.surfaces(&mut polygons)?;
@@ -52,7 +59,7 @@ pub fn to_multi_polygon(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
             bytes.len()
         ));
     }
-    Ok(MultiPolygon(polygons))
+    Ok((MultiPolygon(polygons), reader.arcs))
 }
 
 /// The type without Z, M or SRID flags: 10 for CurvePolygon, Z, M or ZM, ISO or extended.
@@ -72,6 +79,8 @@ struct Reader<'a> {
     at: usize,
     /// How many collections and compound curves hold the one being read.
     depth: usize,
+    /// How many arcs have been cut.
+    arcs: usize,
 }
 
 /// The deepest nesting read, as the `wkb` crate reads straight geometries: a few bytes per
@@ -224,6 +233,7 @@ impl Reader<'_> {
                 let mut line: Vec<Coord<f64>> = points.first().copied().into_iter().collect();
                 for arc in points.windows(3).step_by(2) {
                     push_arc(&mut line, arc[0], arc[1], arc[2]);
+                    self.arcs += 1;
                 }
                 Ok(line)
             }
