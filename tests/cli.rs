@@ -1596,7 +1596,11 @@ fn curved_regions_are_linearised_and_keep_their_neighbours() {
         p(&plain_src),
     ]);
     assert_success(&output);
-    assert!(!stdout(&output).contains("curved geometry"), "{}", stdout(&output));
+    assert!(
+        !stdout(&output).contains("curved geometry"),
+        "{}",
+        stdout(&output)
+    );
 }
 
 /// The command, its temporary files kept in `tmp`.

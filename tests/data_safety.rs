@@ -696,6 +696,43 @@ fn a_signal_stops_the_run_removes_its_staging_and_ends_the_process_by_it() {
 }
 
 #[test]
+fn a_signal_sends_nothing_to_standard_output_and_leaves_no_temporary_folder() {
+    let scratch = Scratch::new("signal-stdout");
+    let src = scratch.input("us_counties");
+    let tmp = scratch.path("tmp");
+    std::fs::create_dir(&tmp).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_snakegrid"))
+        .env("TMPDIR", &tmp)
+        .args(["-q", "-f", "GeoJSON", "-id", "id", "/vsistdout/", p(&src)])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The run is under way once its staging folder is in its temporary folder.
+    let started = || {
+        std::fs::read_dir(&tmp)
+            .unwrap()
+            .any(|folder| !staging_left(&folder.unwrap().path()).is_empty())
+    };
+    let mut child = child;
+    while !started() {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("the run ended ({status}) before its staging folder appeared");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let kill = Command::new("sh")
+        .args(["-c", &format!("kill -s INT {}", child.id())])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.signal(), Some(signal_hook::consts::SIGINT));
+    assert!(out.stdout.is_empty(), "{} bytes sent", out.stdout.len());
+    assert_eq!(std::fs::read_dir(&tmp).unwrap().count(), 0);
+}
+
+#[test]
 fn a_staging_folder_a_killed_run_left_is_removed_with_a_note() {
     let scratch = Scratch::new("stale");
     let (_, src) = source(&scratch);
