@@ -516,10 +516,14 @@ fn write_regions(path: &Path, epsg: u32, rows: &[(String, String)]) {
     write_layer(path, "regions", epsg, &rows);
 }
 
-/// Writes a GeoPackage layer `name` in EPSG:`epsg` (field `code`, null when "") with the given
-/// WKT geometries (None: null).
+/// Writes a GeoPackage layer (or a GML one, for a `.gml` path) `name` in EPSG:`epsg` (field
+/// `code`, null when "") with the given WKT geometries (None: null).
 fn write_layer(path: &Path, name: &str, epsg: u32, rows: &[(&str, Option<&str>)]) {
-    let driver = DriverManager::get_driver_by_name("GPKG").unwrap();
+    let format = match path.extension().and_then(|e| e.to_str()) {
+        Some("gml") => "GML",
+        _ => "GPKG",
+    };
+    let driver = DriverManager::get_driver_by_name(format).unwrap();
     let mut dataset = if path.exists() {
         Dataset::open_ex(
             path,
@@ -1664,4 +1668,46 @@ fn standard_output_takes_one_output_once_the_run_has_succeeded() {
     }
     // Every temporary folder is gone.
     assert_eq!(std::fs::read_dir(&tmp).unwrap().count(), 0);
+}
+
+#[test]
+fn a_field_the_source_declares_not_null_is_kept_so() {
+    // GDAL reads a GML layer's gml_id as NOT NULL, as it reads a column a user constrained in
+    // QGIS: the output keeps the constraint, as ogr2ogr does, and the trial layer written
+    // before the layout (one blank feature) must honour it too.
+    let scratch = Scratch::new("not-null");
+    let src = scratch.path("squares.gml");
+    let rows: Vec<(String, String)> = (0..4)
+        .map(|k| {
+            let (x, y) = (1000 * (k % 2), 1000 * (k / 2));
+            let ring = format!(
+                "{x} {y},{} {y},{} {},{x} {},{x} {y}",
+                x + 1000,
+                x + 1000,
+                y + 1000,
+                y + 1000
+            );
+            (format!("s{k}"), format!("POLYGON(({ring}))"))
+        })
+        .collect();
+    write_regions(&src, 3857, &rows);
+    let source = Dataset::open(&src).unwrap();
+    let declared = source
+        .layer(0)
+        .unwrap()
+        .defn()
+        .fields()
+        .any(|f| !f.is_nullable());
+    assert!(declared, "GDAL reads gml_id as NOT NULL");
+    let dst = scratch.path("grid.gpkg");
+    assert_success(&snakegrid(["-q", "-id", "code", p(&dst), p(&src)]));
+    let written = Dataset::open(&dst).unwrap();
+    let layer = written.layer(0).unwrap();
+    let gml_id = layer
+        .defn()
+        .fields()
+        .find(|f| f.name() == "gml_id")
+        .unwrap();
+    assert!(!gml_id.is_nullable());
+    assert_eq!(read_rows(&dst).1.len(), 4);
 }

@@ -125,13 +125,28 @@ impl Trial<'_> {
         }
         let repeated = without_repeated_names(&mut fields);
         // Null (not unset) values, which even formats without a schema (GeoJSON) write, so that
-        // every field reads back.
+        // every field reads back; a field the source declares NOT NULL (a GML layer's gml_id,
+        // a constraint set in QGIS), which the output keeps as ogr2ogr does, gets a value of
+        // its type instead.
         let mut blank =
             Feature::new(source).map_err(|e| self.session.io_error("cannot make a feature", e))?;
-        for k in 0..names.len() {
-            blank
-                .set_field_null(k)
-                .map_err(|e| self.session.io_error("cannot make a feature", e))?;
+        for (k, field) in source.fields().enumerate() {
+            let placeholder = match field.field_type() {
+                _ if field.is_nullable() => None,
+                OGRFieldType::OFTInteger | OGRFieldType::OFTInteger64 | OGRFieldType::OFTReal => {
+                    Some("0")
+                }
+                OGRFieldType::OFTString => Some(""),
+                OGRFieldType::OFTDate => Some("2000-01-01"),
+                OGRFieldType::OFTTime => Some("00:00:00"),
+                OGRFieldType::OFTDateTime => Some("2000-01-01T00:00:00"),
+                _ => None,
+            };
+            match placeholder {
+                Some(value) => blank.set_field_string(k, value),
+                None => blank.set_field_null(k),
+            }
+            .map_err(|e| self.session.io_error("cannot make a feature", e))?;
         }
         // Each pass renames at least one more source field, so there are at most as many passes
         // as computed fields, plus the one that finds nothing more to rename.
