@@ -1711,3 +1711,42 @@ fn a_field_the_source_declares_not_null_is_kept_so() {
     assert!(!gml_id.is_nullable());
     assert_eq!(read_rows(&dst).1.len(), 4);
 }
+
+#[test]
+fn kml_keeps_every_field_beside_its_own_name_and_description() {
+    // GDAL's KML driver makes every layer with fields of its own (Name, Description) before
+    // the source's: the cells' values must still land in their fields.
+    let scratch = Scratch::new("kml");
+    let src = scratch.input("us_states");
+    let (kml, gpkg) = (scratch.path("grid.kml"), scratch.path("grid.gpkg"));
+    assert_success(&snakegrid([
+        "-q",
+        "-f",
+        "KML",
+        "-id",
+        "id",
+        p(&kml),
+        p(&src),
+    ]));
+    assert_success(&snakegrid(["-q", "-id", "id", p(&gpkg), p(&src)]));
+    // Only the fields asked for: KML's own (a null timestamp) do not read as text.
+    let cells = |path: &Path| -> BTreeMap<String, (i32, i32)> {
+        let dataset = Dataset::open(path).unwrap();
+        let mut layer = dataset.layer(0).unwrap();
+        let index = |name: &str| layer.defn().field_index(name).unwrap();
+        let (id, col, row) = (index("id"), index("grid_col"), index("grid_row"));
+        layer
+            .features()
+            .map(|f| {
+                let int = |k| f.field_as_integer(k).unwrap().unwrap();
+                (
+                    f.field_as_string(id).unwrap().unwrap(),
+                    (int(col), int(row)),
+                )
+            })
+            .collect()
+    };
+    let in_kml = cells(&kml);
+    assert_eq!(in_kml.len(), 49);
+    assert_eq!(in_kml, cells(&gpkg));
+}

@@ -276,13 +276,15 @@ fn fill(
         )));
     }
 
+    // Fields the driver makes with every layer (KML's Name and Description) come first.
+    let builtin = layer.defn().fields().count();
     // Source field k goes to output field field_map[k] (−1: not written).
     let mut field_map: Vec<c_int> = vec![-1; first.source.field_count()];
     for (position, field) in spec.fields.iter().enumerate() {
         create_field(&layer, first.source, field)
             .map_err(|e| fail(&format!("cannot create field {:?}", field.name), e))?;
         if let Some(slot) = field_map.get_mut(field.source) {
-            *slot = c_int::try_from(position)
+            *slot = c_int::try_from(builtin + position)
                 .map_err(|_| Error::Io("too many fields for the output".into()))?;
         }
     }
@@ -291,7 +293,12 @@ fn fill(
             .and_then(|d| d.add_to_layer(&layer))
             .map_err(|e| fail(&format!("cannot create field {name:?}"), e))?;
     }
-    let fields: Vec<String> = layer.defn().fields().map(|f| f.name()).collect();
+    let fields: Vec<String> = layer
+        .defn()
+        .fields()
+        .skip(builtin)
+        .map(|f| f.name())
+        .collect();
     if fields.len() != spec.fields.len() + OUTPUT_FIELDS.len() {
         return Err(Error::Io(format!(
             "the {} driver did not create every field",
@@ -317,10 +324,9 @@ fn fill(
         feature
             .set_geometry(square)
             .and_then(|_| {
-                row.computed
-                    .iter()
-                    .enumerate()
-                    .try_for_each(|(j, value)| feature.set_field(spec.fields.len() + j, value))
+                row.computed.iter().enumerate().try_for_each(|(j, value)| {
+                    feature.set_field(builtin + spec.fields.len() + j, value)
+                })
             })
             .and_then(|_| feature.create(&layer))
             .map_err(|e| fail(&format!("cannot write the cell of {:?}", row.id), e))?;
