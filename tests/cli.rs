@@ -1529,6 +1529,19 @@ fn a_layer_round_a_pole_is_laid_out_round_the_pole() {
     assert_eq!(assert_grid(&rows, "code").len(), 24);
 }
 
+/// Four 1 km squares in a 2 × 2 block, ids s0 to s3, each ring's coordinates ("x y,…") made a
+/// geometry's WKT by `wkt`.
+fn block_of_squares(wkt: impl Fn(&str) -> String) -> Vec<(String, String)> {
+    (0..4)
+        .map(|k| {
+            let (x, y) = (1000 * (k % 2), 1000 * (k / 2));
+            let (east, north) = (x + 1000, y + 1000);
+            let ring = format!("{x} {y},{east} {y},{east} {north},{x} {north},{x} {y}");
+            (format!("s{k}"), wkt(&ring))
+        })
+        .collect()
+}
+
 #[test]
 fn curved_regions_are_linearised_and_keep_their_neighbours() {
     // Three rings of eight sectors about the origin, each sector a CurvePolygon whose inner and
@@ -1579,19 +1592,7 @@ fn curved_regions_are_linearised_and_keep_their_neighbours() {
     // MultiSurfaces of plain polygons, as GML readers hand them over, have nothing to
     // linearise and no note says otherwise.
     let plain_src = scratch.path("plain.gpkg");
-    let squares: Vec<(String, String)> = (0..4)
-        .map(|k| {
-            let (x, y) = (1000 * (k % 2), 1000 * (k / 2));
-            let ring = format!(
-                "{x} {y},{} {y},{} {},{x} {},{x} {y}",
-                x + 1000,
-                x + 1000,
-                y + 1000,
-                y + 1000
-            );
-            (format!("s{k}"), format!("MULTISURFACE((({ring})))"))
-        })
-        .collect();
+    let squares = block_of_squares(|ring| format!("MULTISURFACE((({ring})))"));
     write_regions(&plain_src, 3857, &squares);
     let output = snakegrid([
         "-id",
@@ -1677,20 +1678,11 @@ fn a_field_the_source_declares_not_null_is_kept_so() {
     // before the layout (one blank feature) must honour it too.
     let scratch = Scratch::new("not-null");
     let src = scratch.path("squares.gml");
-    let rows: Vec<(String, String)> = (0..4)
-        .map(|k| {
-            let (x, y) = (1000 * (k % 2), 1000 * (k / 2));
-            let ring = format!(
-                "{x} {y},{} {y},{} {},{x} {},{x} {y}",
-                x + 1000,
-                x + 1000,
-                y + 1000,
-                y + 1000
-            );
-            (format!("s{k}"), format!("POLYGON(({ring}))"))
-        })
-        .collect();
-    write_regions(&src, 3857, &rows);
+    write_regions(
+        &src,
+        3857,
+        &block_of_squares(|ring| format!("POLYGON(({ring}))")),
+    );
     let source = Dataset::open(&src).unwrap();
     let declared = source
         .layer(0)
