@@ -1742,3 +1742,50 @@ fn kml_keeps_every_field_beside_its_own_name_and_description() {
     assert_eq!(in_kml.len(), 49);
     assert_eq!(in_kml, cells(&gpkg));
 }
+
+#[test]
+fn list_fields_a_format_lacks_are_written_as_json_text() {
+    // A GeoJSON layer with array properties: FlatGeobuf takes list fields' definitions but
+    // fails at the first feature with a value, and a Shapefile refuses them.
+    let scratch = Scratch::new("lists");
+    let src = scratch.path("lists.geojson");
+    let features: Vec<serde_json::Value> = block_of_squares(|ring| ring.to_owned())
+        .into_iter()
+        .map(|(id, ring)| {
+            let points: Vec<[f64; 2]> = ring
+                .split(',')
+                .map(|xy| {
+                    let mut it = xy.split(' ').map(|v| v.parse::<f64>().unwrap());
+                    [it.next().unwrap(), it.next().unwrap()]
+                })
+                .collect();
+            serde_json::json!({
+                "type": "Feature",
+                "properties": {"code": id, "tags": ["a", "b"], "nums": [1, 2, 3]},
+                "geometry": {"type": "Polygon", "coordinates": [points]}
+            })
+        })
+        .collect();
+    let collection = serde_json::json!({
+        "type": "FeatureCollection",
+        "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::3857"}},
+        "features": features
+    });
+    std::fs::write(&src, collection.to_string()).unwrap();
+    for name in ["grid.fgb", "grid.shp"] {
+        let dst = scratch.path(name);
+        let output = snakegrid(["-id", "code", p(&dst), p(&src)]);
+        assert_success(&output);
+        assert!(
+            stdout(&output)
+                .contains("the source field \"tags\" (StringList) is written as JSON text"),
+            "{}",
+            stdout(&output)
+        );
+        let (_, rows) = read_rows(&dst);
+        assert_eq!(rows.len(), 4);
+        assert!(rows
+            .iter()
+            .all(|r| r.fields["tags"] == r#"["a","b"]"# && r.fields["nums"] == "[1,2,3]"));
+    }
+}

@@ -198,16 +198,14 @@ pub(crate) fn write(
         }
         Err(_) => None,
     };
-    let written = match in_transaction {
+    let mut written = match in_transaction {
         Some(written) => written,
         None => fill(session, &mut dataset, spec, rows, progress)?,
     };
     // Closing flushes; a failure here (disk full) must fail the run.
     dataset.close().map_err(|e| fail("write", e))?;
-    Ok(Written {
-        notes: session.warnings(),
-        ..written
-    })
+    written.notes.extend(session.warnings());
+    Ok(written)
 }
 
 /// A new vector dataset with dataset creation options: the binding makes one either without
@@ -259,6 +257,11 @@ fn fill(
         .first()
         .ok_or_else(|| Error::Internal("a grid layer without features".into()))?;
     let option_refs: Vec<&str> = spec.options.iter().map(String::as_str).collect();
+    let (driver_name, declared) = {
+        let driver = dataset.driver();
+        let declared = driver.metadata_item("DMD_CREATIONFIELDDATATYPES", "");
+        (driver.short_name(), declared)
+    };
     let mut layer = dataset
         .create_layer(LayerOptions {
             name: spec.name,
@@ -280,8 +283,24 @@ fn fill(
     let builtin = layer.defn().fields().count();
     // Source field k goes to output field field_map[k] (−1: not written).
     let mut field_map: Vec<c_int> = vec![-1; first.source.field_count()];
+    // List fields the format lacks, as (source field, output field): written as JSON text.
+    let mut as_json: Vec<(usize, usize)> = Vec::new();
+    let mut notes = Vec::new();
     for (position, field) in spec.fields.iter().enumerate() {
-        create_field(&layer, first.source, field)
+        let lacked = list_type(first.source, field.source).filter(|kind| {
+            declared
+                .as_deref()
+                .is_some_and(|d| !d.split(' ').any(|t| t == kind))
+        });
+        if let Some(kind) = &lacked {
+            as_json.push((field.source, builtin + position));
+            notes.push(format!(
+                "the source field {:?} ({kind}) is written as JSON text: the {driver_name} \
+                 format has no {kind} fields",
+                field.name
+            ));
+        }
+        create_field(&layer, first.source, field, lacked.is_some())
             .map_err(|e| fail(&format!("cannot create field {:?}", field.name), e))?;
         if let Some(slot) = field_map.get_mut(field.source) {
             *slot = c_int::try_from(builtin + position)
@@ -316,6 +335,14 @@ fn fill(
         let mut feature =
             Feature::new(layer.defn()).map_err(|e| fail("cannot make a feature", e))?;
         copy_field_values(&mut feature, row.source, &field_map)
+            .and_then(|_| {
+                as_json.iter().try_for_each(|&(source, output)| {
+                    match list_as_json(row.source, source) {
+                        Some(json) => feature.set_field_string(output, &json),
+                        None => Ok(()),
+                    }
+                })
+            })
             .map_err(|e| fail(&format!("cannot copy the attributes of {:?}", row.id), e))?;
         let square = row
             .cell
@@ -337,16 +364,52 @@ fn fill(
     Ok(Written {
         layer: layer.name(),
         fields,
-        notes: Vec::new(),
+        notes,
     })
 }
 
+/// The type name of source field `index` of `source` when it holds a list ("StringList", …).
+fn list_type(source: &Feature, index: usize) -> Option<String> {
+    let index = c_int::try_from(index).ok()?;
+    // SAFETY: `source` is a live feature; OGR_F_GetFieldDefnRef returns NULL for an index
+    // outside its definition (checked), else a definition its own definition holds.
+    let kind = unsafe {
+        let definition = gdal_sys::OGR_F_GetFieldDefnRef(source.c_feature(), index);
+        if definition.is_null() {
+            return None;
+        }
+        gdal_sys::OGR_Fld_GetType(definition)
+    };
+    matches!(
+        kind,
+        OGRFieldType::OFTIntegerList
+            | OGRFieldType::OFTInteger64List
+            | OGRFieldType::OFTRealList
+            | OGRFieldType::OFTStringList
+    )
+    .then(|| gdal::vector::field_type_to_name(kind))
+}
+
+/// Source field `index` of `source`, a list, as a JSON array (`["a","b"]`, `[1,2]`), as a
+/// GeoPackage stores one; `None` when it is null.
+fn list_as_json(source: &Feature, index: usize) -> Option<String> {
+    let json = match source.field(index).ok()?? {
+        FieldValue::StringListValue(v) => serde_json::to_string(&v),
+        FieldValue::IntegerListValue(v) => serde_json::to_string(&v),
+        FieldValue::Integer64ListValue(v) => serde_json::to_string(&v),
+        FieldValue::RealListValue(v) => serde_json::to_string(&v),
+        _ => return None,
+    };
+    json.ok()
+}
+
 /// Creates `field` on `layer`: the source's definition as it is, or a copy of it under the new
-/// name.
+/// name, or (`as_json`) a copy of type String holding JSON.
 fn create_field<L: LayerAccess>(
     layer: &L,
     source: &Feature,
     field: &OutputField,
+    as_json: bool,
 ) -> gdal::errors::Result<()> {
     let index = c_int::try_from(field.source)?;
     if index >= c_int::try_from(source.field_count())? {
@@ -364,10 +427,14 @@ fn create_field<L: LayerAccess>(
         let definition = gdal_sys::OGR_F_GetDefnRef(source.c_feature());
         let original = gdal_sys::OGR_FD_GetFieldDefn(definition, index);
         let same_name = CStr::from_ptr(gdal_sys::OGR_Fld_GetNameRef(original)) == name.as_c_str();
-        if same_name {
+        if same_name && !as_json {
             gdal_sys::OGR_L_CreateField(layer.c_layer(), original, 1)
         } else {
             let copy = renamed_copy(original, &name);
+            if as_json {
+                gdal_sys::OGR_Fld_SetType(copy, OGRFieldType::OFTString);
+                gdal_sys::OGR_Fld_SetSubType(copy, gdal_sys::OGRFieldSubType::OFSTJSON);
+            }
             let result = gdal_sys::OGR_L_CreateField(layer.c_layer(), copy, 1);
             gdal_sys::OGR_Fld_Destroy(copy);
             result
