@@ -283,8 +283,8 @@ fn fill(
     let builtin = layer.defn().fields().count();
     // Source field k goes to output field field_map[k] (−1: not written).
     let mut field_map: Vec<c_int> = vec![-1; first.source.field_count()];
-    // List fields the format lacks, as (source field, output field): written as JSON text.
-    let mut as_json: Vec<(usize, usize)> = Vec::new();
+    // The source list fields the format lacks: written as JSON text, where field_map says.
+    let mut as_json: Vec<usize> = Vec::new();
     let mut notes = Vec::new();
     for (position, field) in spec.fields.iter().enumerate() {
         let lacked = list_type(first.source, field.source).filter(|kind| {
@@ -293,7 +293,7 @@ fn fill(
                 .is_some_and(|d| !d.split(' ').any(|t| t == kind))
         });
         if let Some(kind) = &lacked {
-            as_json.push((field.source, builtin + position));
+            as_json.push(field.source);
             notes.push(format!(
                 "the source field {:?} ({kind}) is written as JSON text: the {driver_name} \
                  format has no {kind} fields",
@@ -336,9 +336,15 @@ fn fill(
             Feature::new(layer.defn()).map_err(|e| fail("cannot make a feature", e))?;
         copy_field_values(&mut feature, row.source, &field_map)
             .and_then(|_| {
-                as_json.iter().try_for_each(|&(source, output)| {
+                as_json.iter().try_for_each(|&source| {
                     match list_as_json(row.source, source) {
-                        Some(json) => feature.set_field_string(output, &json),
+                        // A list field the format lacks was written: its output index is ≥ 0.
+                        Some(json) => {
+                            let output = usize::try_from(field_map[source]).map_err(|_| {
+                                gdal::errors::GdalError::BadArgument("an unwritten field".into())
+                            })?;
+                            feature.set_field_string(output, &json)
+                        }
                         None => Ok(()),
                     }
                 })
