@@ -25,28 +25,71 @@ use std::collections::BinaryHeap;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering as AtomicOrdering};
 use std::sync::{Mutex, PoisonError};
 
-/// When two regions' boundaries share a border: where they run within `reach` of each other for
-/// a length above `least` (both in cells).
+/// When two regions' boundaries share a border: where, at one of its reaches at least, they run
+/// within the reach of each other for a length above the reach's least.
 #[derive(Clone, Copy)]
 struct Touching {
+    /// Up to [`MOST_REACHES`] of them.
+    reaches: &'static [Reach],
+}
+
+/// A distance between two boundaries and the length they must run within it to share a border
+/// (both in cells).
+#[derive(Clone, Copy)]
+struct Reach {
     reach: f64,
     least: f64,
 }
+
+impl Touching {
+    /// The widest reach: how far apart the boundaries searched for each other may lie.
+    fn widest(self) -> f64 {
+        self.reaches.iter().map(|r| r.reach).fold(0.0, f64::max)
+    }
+}
+
+/// The most reaches a [`Touching`] tries: down to a 128th of [`GAP_CLOSED`].
+const MOST_REACHES: usize = 8;
 
 /// Adjacency as the judge reads it (method.md §8): shared borders that were noded identically
 /// meet exactly, but reprojection and rounding leave tiny gaps; and two regions share a border
 /// rather than meet at a point above a ten-thousandth of a cell.
 const SHARED: Touching = Touching {
-    reach: 1e-6,
-    least: 1e-4,
+    reaches: &[Reach {
+        reach: 1e-6,
+        least: 1e-4,
+    }],
 };
 /// Neighbours for the layout where the outline's parts were joined across hairline gaps
-/// ([`close_gaps`]): borders that run within the gap of each other, for ten times the gap's
-/// width (corners that come near across a gap are not borders).
+/// ([`close_gaps`]): borders that run within the gap of each other for ten times the gap's
+/// width (corners that come near across a gap run so for a few widths at most, so they are not
+/// borders). The gap's width is not known, so reaches from [`GAP_CLOSED`] down, halving, are
+/// tried: with the closing's gap alone, a short border across a narrow gap was lost (Delaware
+/// and New Jersey, 0.04 cells long and 0.002 cells apart: the layout then had no reason to keep
+/// them together).
 const ACROSS_GAPS: Touching = Touching {
-    reach: GAP_CLOSED,
-    least: 10.0 * GAP_CLOSED,
+    reaches: &halving_reaches(),
 };
+
+/// [`MOST_REACHES`] reaches from [`GAP_CLOSED`] down, each half the one before, each needing a
+/// length of ten times itself.
+const fn halving_reaches() -> [Reach; MOST_REACHES] {
+    let mut reaches = [Reach {
+        reach: GAP_CLOSED,
+        least: 10.0 * GAP_CLOSED,
+    }; MOST_REACHES];
+    let mut k = 1;
+    while k < MOST_REACHES {
+        let reach = 0.5 * reaches[k - 1].reach;
+        reaches[k] = Reach {
+            reach,
+            least: 10.0 * reach,
+        };
+        k += 1;
+    }
+    reaches
+}
+
 /// Boundary segments per parallel task of the adjacency search.
 const ADJACENCY_CHUNK: usize = 4096;
 /// Holes smaller than this many cells² are slivers between regions, not lakes (§1).
@@ -128,7 +171,7 @@ pub fn prepare(
         .map(|(r, &fallback)| r.centroid().map_or(fallback, |p| p.0))
         .collect();
     // A repair stays within the box of the region as drawn: the drawn boxes group both.
-    let clusters = clusters(drawn, SHARED.reach);
+    let clusters = clusters(drawn, SHARED.widest());
     if !reached(0.05, "outline: adjacency and union") {
         return None;
     }
@@ -177,7 +220,7 @@ pub fn prepare(
     let neighbours = if joined {
         let near = self::adjacency(
             drawn,
-            &self::clusters(drawn, ACROSS_GAPS.reach),
+            &self::clusters(drawn, ACROSS_GAPS.widest()),
             params.point_adjacency,
             ACROSS_GAPS,
             // A second search of every border, heard by the host at the outline's end.
@@ -524,7 +567,7 @@ fn adjacency(
     regions: &[&MultiPolygon<f64>],
     clusters: &[Vec<usize>],
     point_adjacency: bool,
-    Touching { reach, least }: Touching,
+    touching: Touching,
     reached: &(dyn Fn(f64) -> bool + Sync),
 ) -> Option<Vec<(usize, usize)>> {
     // A region alone in its cluster touches no other.
@@ -554,7 +597,7 @@ fn adjacency(
     })?;
     // With `point_adjacency` every edge is searched, since regions that meet at a corner share
     // no edge.
-    let (mut shared, searched) = if point_adjacency {
+    let (shared, searched) = if point_adjacency {
         (Default::default(), edges)
     } else {
         // A sort of 10⁷ edges takes a second and cannot stop itself: watched, and heard by the
@@ -588,10 +631,14 @@ fn adjacency(
     let chunks = searched.len().div_ceil(ADJACENCY_CHUNK).max(1) as f64;
     // In parallel over fixed chunks of edges, summed chunk by chunk in order: the same sums
     // (to the last bit) with any number of threads.
-    let per_chunk: Vec<BTreeMap<(usize, usize), f64>> = searched
+    let (reaches, reach) = (touching.reaches, touching.widest());
+    debug_assert!(reaches.len() <= MOST_REACHES);
+    // Per pair, the length shared within each reach.
+    type Lengths = [f64; MOST_REACHES];
+    let per_chunk: Vec<BTreeMap<(usize, usize), Lengths>> = searched
         .par_chunks(ADJACENCY_CHUNK)
         .map(|chunk| {
-            let mut shared: BTreeMap<(usize, usize), f64> = Default::default();
+            let mut shared: BTreeMap<(usize, usize), Lengths> = Default::default();
             if stop.load(AtomicOrdering::Relaxed) {
                 return shared;
             }
@@ -609,7 +656,12 @@ fn adjacency(
                     if f.region <= e.region || !touches(e, f, reach) {
                         continue;
                     }
-                    *shared.entry((e.region, f.region)).or_default() += overlap(e, f, reach);
+                    let lengths = shared.entry((e.region, f.region)).or_default();
+                    for (length, r) in lengths.iter_mut().zip(reaches) {
+                        if r.reach == reach || touches(e, f, r.reach) {
+                            *length += overlap(e, f, r.reach);
+                        }
+                    }
                 }
             }
             let done = chunks_done.fetch_add(1, AtomicOrdering::Relaxed) + 1;
@@ -625,13 +677,22 @@ fn adjacency(
     if stop.into_inner() {
         return None;
     }
+    // A border shared vertex for vertex is shared within every reach.
+    let mut lengths: BTreeMap<(usize, usize), Lengths> = (shared.into_iter())
+        .map(|(pair, length)| (pair, [length; MOST_REACHES]))
+        .collect();
     for chunk in per_chunk {
-        for (pair, length) in chunk {
-            *shared.entry(pair).or_default() += length;
+        for (pair, found) in chunk {
+            let sums = lengths.entry(pair).or_default();
+            for (sum, length) in sums.iter_mut().zip(found) {
+                *sum += length;
+            }
         }
     }
-    let pairs = (shared.into_iter())
-        .filter(|&(_, length)| point_adjacency || length > least)
+    let pairs = (lengths.into_iter())
+        .filter(|(_, lengths)| {
+            point_adjacency || lengths.iter().zip(reaches).any(|(&l, r)| l > r.least)
+        })
         .map(|(pair, _)| pair)
         .collect();
     Some(pairs)
@@ -1668,6 +1729,26 @@ mod tests {
         assert_eq!(apart.rings.len(), 2);
         assert!(apart.neighbours.is_empty());
         assert_eq!(polygons_of(&apart.rings).unsigned_area(), 2.0);
+    }
+
+    #[test]
+    fn a_short_border_across_a_narrow_gap_is_kept_and_a_corner_is_not() {
+        // Delaware and New Jersey drawn a hairline apart: a border of 0.04 cells across a gap
+        // of 0.002 (a fifth of the closing's gap) was lost when only a facing of ten times the
+        // closing's gap (0.1 cells) counted.
+        let gap = 0.2 * GAP_CLOSED;
+        let regions = [
+            square(0.0, 0.0),
+            // Beside the first square's upper right corner, facing it for 0.04.
+            square(1.0 + gap, 0.96),
+            // Diagonally below the first, meeting it only corner to corner across the gap.
+            square(-1.0 - gap, -1.0 - gap),
+        ];
+        let refs: Vec<&MultiPolygon<f64>> = regions.iter().collect();
+        let prepared = prepare(&refs, &refs, &[true; 3], &Params::default(), &|_, _| true)
+            .expect("not cancelled");
+        assert!(prepared.adjacency.is_empty());
+        assert_eq!(prepared.neighbours, vec![(0, 1)]);
     }
 
     #[test]
