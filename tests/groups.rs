@@ -4,7 +4,7 @@
 // Reads the shared layers through GDAL.
 #![cfg(feature = "gdal")]
 
-use geo::{unary_union, Area, BooleanOps, MultiPolygon};
+use geo::{unary_union, Area, BooleanOps, Buffer, MultiPolygon};
 use snakegrid::io::{read_regions, Job};
 use snakegrid::tiling::Tiling;
 use snakegrid::{generate, GridMap, Params, Region};
@@ -273,4 +273,23 @@ fn a_region_without_a_group_is_a_group_of_its_own() {
     let blocks: HashSet<u32> = plain.cells.iter().map(|c| c.block).collect();
     assert!(blocks.len() <= plain.metrics.source_pieces as usize);
     assert_eq!(blocks.iter().max().copied(), Some(blocks.len() as u32));
+}
+
+#[test]
+fn groups_drawn_a_hairline_apart_are_measured_as_neighbours() {
+    // North and South Carolina's counties each narrowed by 20 m (cells of about 39 km): no two
+    // share a border, and the judge's exact reading finds no adjacent states. The layout keeps
+    // the counties facing each other across the gaps together, and its group metrics count the
+    // two states as the neighbours they are (before: no pair of groups to measure).
+    let shrunk: Vec<Region> = (counties(Some("state_abbr IN ('NC', 'SC')")).into_iter())
+        .map(|mut region| {
+            region.geometry = region.geometry.buffer(-20.0);
+            region
+        })
+        .collect();
+    let map = run(&shrunk, &Params::default());
+    assert!(map.adjacency.is_empty());
+    let g = map.groups.expect("group metrics for a grouped layer");
+    assert_eq!((g.groups, g.group_pairs), (2, 1));
+    assert_eq!(g.adjacency, 1.0, "the two states' blocks touch");
 }

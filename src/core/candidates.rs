@@ -1613,7 +1613,7 @@ impl Context<'_> {
                     positions: &positions,
                     centres: &centres,
                     places: &self.prepared.area_centroids,
-                    adjacency: &self.prepared.adjacency,
+                    adjacency: &self.prepared.neighbours,
                     tiling: lattice.tiling,
                     gap: self.params.group_gap,
                 })

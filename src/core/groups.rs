@@ -902,7 +902,8 @@ pub struct GroupLayout<'a> {
     /// Cell centres, and the regions' area centroids.
     pub centres: &'a [Coord<f64>],
     pub places: &'a [Coord<f64>],
-    /// Adjacent region pairs.
+    /// Adjacent region pairs, as the layout's metrics count them (with regions drawn a hairline
+    /// apart, those facing each other across the gaps).
     pub adjacency: &'a [(usize, usize)],
     pub tiling: Tiling,
     /// `group_gap`: how many empty cells may lie between adjacent groups' cells.
