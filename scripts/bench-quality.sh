@@ -36,13 +36,17 @@ make ring 300 0.7 1 "$work/ring.gpkg"
 # us_states with neighbours a five-hundredth of a cell apart, judged against us_states itself
 # (its own regions share no border for the judge to count)
 make apart "$data/us_states.gpkg" 0.001 "$work/us_states_apart.gpkg"
-declare -A judged_against=(["us_states_apart"]="$data/us_states.gpkg")
+# and drawn over each other's borders: neighbours overlapping by a five-hundredth of a cell
+make apart "$data/us_states.gpkg" -0.001 "$work/us_states_over.gpkg"
+declare -A judged_against=(["us_states_apart"]="$data/us_states.gpkg"
+    ["us_states_over"]="$data/us_states.gpkg")
 layers=(
     "$data/us_states.gpkg" "$data/nc_counties.gpkg" "$data/virginia_counties.gpkg"
     "$data/world_countries.gpkg" "$data/us_counties.gpkg"
     "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
     "$work/river_33.gpkg"
     "$work/archipelago.gpkg" "$work/strip.gpkg" "$work/ring.gpkg" "$work/us_states_apart.gpkg"
+    "$work/us_states_over.gpkg"
 )
 
 rows="$work/rows.tsv"
@@ -130,7 +134,8 @@ markdown_rows() {
     echo "(\`archipelago\`), a long thin country of 40 Voronoi cells 0.7 cells wide (\`strip\`), a"
     echo "country of 300 Voronoi cells round a lake, 0.7 cells wide (\`ring\`), and"
     echo "us_states with every state narrowed by a thousandth of a cell (\`us_states_apart\`: regions"
-    echo "drawn one by one, neighbours a hairline apart), judged against us_states itself."
+    echo "drawn one by one, neighbours a hairline apart) and widened by as much (\`us_states_over\`:"
+    echo "neighbours drawn over each other's borders), both judged against us_states itself."
     echo
     echo "Columns: C_adjacent in the 8-neighbourhood and the 4-neighbourhood (shared edge), the"
     echo "false-neighbour share, C_orientation (degrees) and the misdirected share (> 45°),"

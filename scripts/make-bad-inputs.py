@@ -283,8 +283,27 @@ def main():
                      square(500000 + 1000 * i + 2, 5000000 + 1000 * j + 2, 996))
              for j in range(3) for i in range(3)]
     geojson("apart.geojson", apart)
-    case("apart.geojson", "ok", "regions stand apart: 12 pair(s) of regions share no border",
+    case("apart.geojson", "ok", "borders not shared exactly: 12 pair(s) of regions share no border",
          why="a 3 × 3 block a hairline apart: its 12 rook pairs face each other across the gaps")
+
+    # A 3 × 3 block of quadrilaterals (a lattice of 1 km with every vertex moved by up to 80 m,
+    # so that no two borders are parallel) drawn over each other's borders: each widened by
+    # 2 m, so neighbours overlap by 4 m along their borders and share none exactly.
+    def corner(i, j):
+        return [500000 + 1000 * i + 80 * math.sin(3.1 * i + 1.7 * j),
+                5000000 + 1000 * j + 80 * math.cos(2.3 * i + 4.1 * j)]
+    over = []
+    for j in range(3):
+        for i in range(3):
+            ring = [corner(i, j), corner(i + 1, j), corner(i + 1, j + 1), corner(i, j + 1),
+                    corner(i, j)]
+            widened = ogr.CreateGeometryFromJson(
+                json.dumps({"type": "Polygon", "coordinates": [ring]})).Buffer(2.0, 2)
+            over.append(feature(f"w{j}{i}", "Polygon",
+                                json.loads(widened.ExportToJson())["coordinates"]))
+    geojson("over.geojson", over)
+    case("over.geojson", "ok", "borders not shared exactly: 12 pair(s) of regions share no border",
+         why="a 3 × 3 block overlapping by a hairline: its 12 rook pairs run along each other")
 
     with open(os.path.join(OUT, "cases.tsv"), "w", encoding="utf-8") as f:
         f.write("# file\tid field\texpected (ok, or the kind of error: invalid_input, io_error)\ttext the error message or a note must hold (- for none)\n")

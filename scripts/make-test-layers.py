@@ -22,7 +22,9 @@
     make-test-layers.py apart SRC CELLS OUT.gpkg    SRC with every region narrowed by CELLS cells
                                                     (a cell: the square root of the mean region
                                                     area), so that neighbours stand 2 x CELLS
-                                                    apart: regions drawn or simplified one by one
+                                                    apart: regions drawn or simplified one by one;
+                                                    a negative CELLS widens them, so that
+                                                    neighbours overlap along their borders
     make-test-layers.py densify SRC VERTICES OUT.gpkg
                                                     SRC with every edge subdivided, to about
                                                     VERTICES vertices in all, with a small wiggle

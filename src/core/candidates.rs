@@ -476,12 +476,13 @@ impl Input {
             ));
         }
         stacked(&prepared.neighbours, regions, &order)?;
-        let across_gaps = prepared.neighbours.len() - prepared.adjacency.len();
-        if across_gaps > 0 {
+        let near = prepared.neighbours.len() - prepared.adjacency.len();
+        if near > 0 {
             notes.push(format!(
-                "regions stand apart: {across_gaps} pair(s) of regions share no border but face \
-                 each other across a gap under a hundredth of a cell; they are laid out as \
-                 neighbours and measured so, where a judge reading exact borders counts none"
+                "borders not shared exactly: {near} pair(s) of regions share no border but run \
+                 along each other, across a gap or an overlap under a hundredth of a cell; they \
+                 are laid out as neighbours and measured so, where a judge reading exact borders \
+                 counts none"
             ));
         }
         Ok(Input {

@@ -61,9 +61,9 @@ const SHARED: Touching = Touching {
     }],
 };
 /// Neighbours for the layout where the outline's parts were joined across hairline gaps
-/// ([`close_gaps`]): borders that run within the gap of each other for ten times the gap's
-/// width (corners that come near across a gap run so for a few widths at most, so they are not
-/// borders). The gap's width is not known, so reaches from [`GAP_CLOSED`] down, halving, are
+/// ([`close_gaps`]) or the regions overlap ([`OVERLAP_SEARCHED`]): borders that run within the
+/// gap (or the overlap) of each other for ten times its width (corners that come near across a
+/// gap run so for a few widths at most, so they are not borders). The gap's width is not known, so reaches from [`GAP_CLOSED`] down, halving, are
 /// tried: with the closing's gap alone, a short border across a narrow gap was lost (Delaware
 /// and New Jersey, 0.04 cells long and 0.002 cells apart: the layout then had no reason to keep
 /// them together).
@@ -98,6 +98,13 @@ const SLIVER_AREA: f64 = 0.5;
 /// is done with it: a hundredth of a cell on both sides, the resolution the method needs
 /// (§1; dense boundaries bring vertices a ten-thousandth of a cell apart).
 const FINEST_DETAIL: f64 = 0.5e-4;
+/// Share of the regions' total area covered twice or more above which neighbours are searched
+/// across hairlines as across gaps ([`ACROSS_GAPS`]): regions drawn over each other's borders
+/// (each widened by a ten-thousandth of a cell: 3.7e-4 on us_states and nc_counties) share no
+/// border the exact reading finds, and us_states kept 3 of its 107 pairs. Far above the union's
+/// rounding (at most 5e-9 on the shared layers and the US states and counties at 10⁶
+/// vertices).
+const OVERLAP_SEARCHED: f64 = 1e-6;
 /// Share of the regions' total area covered twice or more above which the overlap is reported:
 /// well above rounding, and below a region of a thousand overlapping a neighbour.
 const OVERLAP_NOTED: f64 = 1e-3;
@@ -136,8 +143,8 @@ pub struct Prepared {
     /// measure.
     pub adjacency: Vec<(usize, usize)>,
     /// The pairs the layout keeps together (i < j), sorted: the adjacent pairs, and where the
-    /// outline's parts were joined across hairline gaps, the regions whose borders face each
-    /// other across them.
+    /// outline's parts were joined across hairline gaps or the regions overlap, the regions
+    /// whose borders run along each other across them.
     pub neighbours: Vec<(usize, usize)>,
     /// The simplified outline.
     pub rings: Vec<Ring>,
@@ -216,8 +223,10 @@ pub fn prepare(
         },
     );
     let (adjacency, (regions_union, landmass_of, simplified, joined)) = (adjacency?, other_side?);
-    // Parts joined across hairline gaps: their regions' borders lie across the gaps too.
-    let neighbours = if joined {
+    // Parts joined across hairline gaps, or regions overlapping along their borders: their
+    // borders run within a hairline of each other without meeting.
+    let near = joined || overlap_share(regions, &regions_union) > OVERLAP_SEARCHED;
+    let neighbours = if near {
         let near = self::adjacency(
             drawn,
             &self::clusters(drawn, ACROSS_GAPS.widest()),
@@ -403,8 +412,7 @@ pub fn overlaps(
     regions: &[&MultiPolygon<f64>],
     union: &MultiPolygon<f64>,
 ) -> Option<(f64, Option<(usize, usize)>)> {
-    let total: f64 = regions.iter().map(|r| r.unsigned_area()).sum();
-    let share = 1.0 - union.unsigned_area() / total;
+    let share = overlap_share(regions, union);
     if share.is_nan() || share <= OVERLAP_NOTED {
         return None;
     }
@@ -418,6 +426,13 @@ pub fn overlaps(
             .map(|i| (i, j))
     });
     Some((share, pair))
+}
+
+/// The share of the `regions`' total area that their `union` does not cover: the area counted
+/// twice or more (within the union's rounding, either side of 0, when none overlap).
+fn overlap_share(regions: &[&MultiPolygon<f64>], union: &MultiPolygon<f64>) -> f64 {
+    let total: f64 = regions.iter().map(|r| r.unsigned_area()).sum();
+    1.0 - union.unsigned_area() / total
 }
 
 /// The bounding boxes `boxes` (none for an empty geometry), each with its index, in an R-tree.
