@@ -38,15 +38,17 @@ make ring 300 0.7 1 "$work/ring.gpkg"
 make apart "$data/us_states.gpkg" 0.001 "$work/us_states_apart.gpkg"
 # and drawn over each other's borders: neighbours overlapping by a five-hundredth of a cell
 make apart "$data/us_states.gpkg" -0.001 "$work/us_states_over.gpkg"
+# us_counties with every county simplified alone by a sixteenth of a cell (ogr2ogr -simplify)
+make simplify "$data/us_counties.gpkg" 0.06 "$work/us_counties_simplified.gpkg"
 declare -A judged_against=(["us_states_apart"]="$data/us_states.gpkg"
-    ["us_states_over"]="$data/us_states.gpkg")
+    ["us_states_over"]="$data/us_states.gpkg" ["us_counties_simplified"]="$data/us_counties.gpkg")
 layers=(
     "$data/us_states.gpkg" "$data/nc_counties.gpkg" "$data/virginia_counties.gpkg"
     "$data/world_countries.gpkg" "$data/us_counties.gpkg"
     "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
     "$work/river_33.gpkg"
     "$work/archipelago.gpkg" "$work/strip.gpkg" "$work/ring.gpkg" "$work/us_states_apart.gpkg"
-    "$work/us_states_over.gpkg"
+    "$work/us_states_over.gpkg" "$work/us_counties_simplified.gpkg"
 )
 
 rows="$work/rows.tsv"
@@ -135,7 +137,10 @@ markdown_rows() {
     echo "country of 300 Voronoi cells round a lake, 0.7 cells wide (\`ring\`), and"
     echo "us_states with every state narrowed by a thousandth of a cell (\`us_states_apart\`: regions"
     echo "drawn one by one, neighbours a hairline apart) and widened by as much (\`us_states_over\`:"
-    echo "neighbours drawn over each other's borders), both judged against us_states itself."
+    echo "neighbours drawn over each other's borders), both judged against us_states itself, and"
+    echo "us_counties with every county simplified alone by a sixteenth of a cell, as \`ogr2ogr"
+    echo "-simplify\` does (\`us_counties_simplified\`: slivers between neighbours), judged against"
+    echo "us_counties."
     echo
     echo "Columns: C_adjacent in the 8-neighbourhood and the 4-neighbourhood (shared edge), the"
     echo "false-neighbour share, C_orientation (degrees) and the misdirected share (> 45°),"

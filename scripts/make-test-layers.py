@@ -25,6 +25,9 @@
                                                     apart: regions drawn or simplified one by one;
                                                     a negative CELLS widens them, so that
                                                     neighbours overlap along their borders
+    make-test-layers.py simplify SRC CELLS OUT.gpkg SRC with every region simplified alone by
+                                                    CELLS cells (Douglas-Peucker), as ogr2ogr
+                                                    -simplify does: slivers between neighbours
     make-test-layers.py densify SRC VERTICES OUT.gpkg
                                                     SRC with every edge subdivided, to about
                                                     VERTICES vertices in all, with a small wiggle
@@ -291,6 +294,17 @@ def apart(src, cells):
     return [str(v) for v in fields[0]], list(narrowed), info["crs"]
 
 
+def simplified(src, cells):
+    """SRC with every region simplified alone (Douglas-Peucker, CELLS cells), as `ogr2ogr
+    -simplify` does: slivers open between neighbours and their borders overlap."""
+    info = pyogrio.read_info(src)
+    _, _, wkb, fields = pyogrio.raw.read(src, columns=["id"])
+    geometries = shapely.from_wkb(wkb)
+    cell = math.sqrt(shapely.area(geometries).sum() / len(geometries))
+    simple = shapely.simplify(geometries, cells * cell, preserve_topology=False)
+    return [str(v) for v in fields[0]], list(simple), info["crs"]
+
+
 def star(vertices):
     t = np.linspace(0, 2 * math.pi, vertices, endpoint=False)
     r = SIDE * (0.5 + 0.4 * np.where(np.arange(vertices) % 2 == 0, 1.0, 0.2))
@@ -332,6 +346,9 @@ def main(argv):
         write(args[3], ids, geometries)
     elif kind == "apart":
         ids, geometries, crs = apart(args[0], float(args[1]))
+        write(args[2], ids, geometries, crs)
+    elif kind == "simplify":
+        ids, geometries, crs = simplified(args[0], float(args[1]))
         write(args[2], ids, geometries, crs)
     elif kind == "densify":
         ids, geometries, crs = densify(args[0], int(float(args[1])))

@@ -403,9 +403,7 @@ fn ranked(layouts: &[Layout], params: &Params) -> (Vec<usize>, Vec<f64>) {
         &layouts.iter().map(|l| l.metrics).collect::<Vec<_>>(),
         params.topsis_weights,
     );
-    let defects = |k: usize| {
-        layouts[k].breaks + layouts[k].metrics.stray_holes() as usize + layouts[k].astray
-    };
+    let defects = |k: usize| layouts[k].breaks + layouts[k].stray_holes() + layouts[k].astray;
     let mut ranking: Vec<usize> = (0..layouts.len()).collect();
     ranking.sort_by(|&a, &b| {
         (defects(a).cmp(&defects(b)))
@@ -1080,6 +1078,19 @@ struct Layout {
     /// How many regions lie nearer another landmass than their own: the wrong-landmass share's
     /// count, from the share (the regions it counts are the same for every layout).
     astray: usize,
+    /// How many of its holes are the source's (method.md §8: a lake, a missing region may
+    /// stay): the area, in fitted cells, of the regions' holes that are not slivers between
+    /// them ([`metrics::Reference::lake_share`]). Counted by area, not by place: a ring of
+    /// regions round a lake encloses hundreds of thousands of positions (a ring of 3,000
+    /// regions), and ranking every one a defect passed over layouts that keep the lake.
+    lakes: u32,
+}
+
+impl Layout {
+    /// The layout's holes beyond the source's own: its defects among them.
+    fn stray_holes(&self) -> usize {
+        self.metrics.holes.saturating_sub(self.lakes) as usize
+    }
 }
 
 /// The regions' blocks (method.md §10): per landmass of the layout, each group's regions, in
@@ -1348,8 +1359,7 @@ impl Context<'_> {
         seed: u64,
         report: &(dyn Fn(Stage, f64) -> bool + Sync),
     ) -> Result<Layout, Error> {
-        let lakes = layout.metrics.lake_cells();
-        let cells = self.refine(&layout.lattice, &layout.cells, lakes, seed, report)?;
+        let cells = self.refine(&layout.lattice, &layout.cells, layout.lakes, seed, report)?;
         Ok(self.scored(layout.lattice, cells, layout.moved_outline, layout.moved))
     }
 
@@ -1379,6 +1389,7 @@ impl Context<'_> {
         Layout {
             breaks,
             astray,
+            lakes: (metrics.source_holes * self.reference.lake_share).round() as u32,
             lattice,
             cells,
             metrics,

@@ -217,20 +217,10 @@ pub struct LayoutMetrics {
 }
 
 impl LayoutMetrics {
-    /// The regions' own holes in whole cells: how many of the layout's holes are the source's
-    /// (method.md §8: a hole the source has may stay). The candidates' ranking, the refinement
-    /// and the summary all read it here.
-    pub fn lake_cells(&self) -> u32 {
+    /// The regions' own holes in whole cells, slivers between regions included, as the judge
+    /// counts them: what the summary reports beside the layout's holes.
+    pub fn source_hole_cells(&self) -> u32 {
         self.source_holes.round() as u32
-    }
-
-    /// The layout's holes beyond the regions' own: its defects among them. Counted by area, not
-    /// by place: a ring of regions round a lake encloses hundreds of thousands of positions (a
-    /// ring of 3,000 regions), and ranking every one a defect passed over layouts that keep the
-    /// lake: for eight squares round a ninth, the one that reproduces them, for one that fills
-    /// the lake in.
-    pub fn stray_holes(&self) -> u32 {
-        self.holes.saturating_sub(self.lake_cells())
     }
 }
 

@@ -93,7 +93,7 @@ const fn halving_reaches() -> [Reach; MOST_REACHES] {
 /// Boundary segments per parallel task of the adjacency search.
 const ADJACENCY_CHUNK: usize = 4096;
 /// Holes smaller than this many cells² are slivers between regions, not lakes (§1).
-const SLIVER_AREA: f64 = 0.5;
+pub(crate) const SLIVER_AREA: f64 = 0.5;
 /// Triangle area, in cells², below which the outline's detail is dropped before anything else
 /// is done with it: a hundredth of a cell on both sides, the resolution the method needs
 /// (§1; dense boundaries bring vertices a ten-thousandth of a cell apart).

@@ -273,7 +273,7 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
     );
     // §8 counts holes in enclosed positions, so a ring of regions round a lake has thousands:
     // the lakes' area, in the same cells, tells those the source has from defects.
-    let lakes = match m.lake_cells() {
+    let lakes = match m.source_hole_cells() {
         0 => String::new(),
         cells => format!(" (the regions' holes: {cells} cells)"),
     };
