@@ -664,18 +664,19 @@ fn adjacency(
                     [env.lower()[0] - t, env.lower()[1] - t],
                     [env.upper()[0] + t, env.upper()[1] + t],
                 );
+                // Each pair once, from its first region; a run holds one region's edges.
                 let near = (tree.locate_in_envelope_intersecting(&search))
+                    .filter(|run| searched[run.data.start].region > e.region)
                     .flat_map(|run| &searched[run.data.clone()])
                     .filter(|f| f.envelope().intersects(&search));
                 for f in near {
-                    if f.region <= e.region || !touches(e, f, reach) {
+                    let beside = Beside::of(e, f);
+                    if !beside.within(reach) {
                         continue;
                     }
                     let lengths = shared.entry((e.region, f.region)).or_default();
                     for (length, r) in lengths.iter_mut().zip(reaches) {
-                        if r.reach == reach || touches(e, f, r.reach) {
-                            *length += overlap(e, f, r.reach);
-                        }
+                        *length += beside.along_within(r.reach);
                     }
                 }
             }
@@ -818,34 +819,64 @@ fn shared_vertex_for_vertex(edges: Vec<Edge>) -> (BTreeMap<(usize, usize), f64>,
     (shared, searched)
 }
 
-fn touches(e: &Edge, f: &Edge, reach: f64) -> bool {
-    if segments_intersect(e.a, e.b, f.a, f.b) {
-        return true;
-    }
-    let d2 = [
-        point_segment_distance2(e.a, f.a, f.b),
-        point_segment_distance2(e.b, f.a, f.b),
-        point_segment_distance2(f.a, e.a, e.b),
-        point_segment_distance2(f.b, e.a, e.b),
-    ];
-    d2.iter().any(|&d| d <= reach * reach)
+/// How a boundary edge `f` lies beside another, `e`: worked out once for every reach tried.
+struct Beside {
+    /// The squared distance between the two edges; 0 where they cross.
+    distance2: f64,
+    /// How far the farther end of `f` lies from `e`'s line.
+    off_line: f64,
+    /// The length along `e` that `f` runs on.
+    along: f64,
 }
 
-/// Length along `e` that `f` runs on (both ends of `f` within `reach` of `e`'s line).
-fn overlap(e: &Edge, f: &Edge, reach: f64) -> f64 {
-    let d = e.b - e.a;
-    let len = (d.x * d.x + d.y * d.y).sqrt();
-    if len == 0.0 {
-        return 0.0;
+impl Beside {
+    fn of(e: &Edge, f: &Edge) -> Beside {
+        let distance2 = if segments_intersect(e.a, e.b, f.a, f.b) {
+            0.0
+        } else {
+            [
+                point_segment_distance2(e.a, f.a, f.b),
+                point_segment_distance2(e.b, f.a, f.b),
+                point_segment_distance2(f.a, e.a, e.b),
+                point_segment_distance2(f.b, e.a, e.b),
+            ]
+            .into_iter()
+            .fold(f64::INFINITY, f64::min)
+        };
+        let d = e.b - e.a;
+        let len = (d.x * d.x + d.y * d.y).sqrt();
+        if len == 0.0 {
+            return Beside {
+                distance2,
+                off_line: 0.0,
+                along: 0.0,
+            };
+        }
+        let u = d / len;
+        let off_line = |p: Coord<f64>| ((p - e.a).x * u.y - (p - e.a).y * u.x).abs();
+        let along = |p: Coord<f64>| (p - e.a).x * u.x + (p - e.a).y * u.y;
+        let (s, t) = (along(f.a), along(f.b));
+        Beside {
+            distance2,
+            off_line: off_line(f.a).max(off_line(f.b)),
+            along: (s.max(t).min(len) - s.min(t).max(0.0)).max(0.0),
+        }
     }
-    let u = d / len;
-    let off_line = |p: Coord<f64>| ((p - e.a).x * u.y - (p - e.a).y * u.x).abs();
-    if off_line(f.a) > reach || off_line(f.b) > reach {
-        return 0.0;
+
+    /// Whether the edges come within `reach` of each other.
+    fn within(&self, reach: f64) -> bool {
+        self.distance2 <= reach * reach
     }
-    let along = |p: Coord<f64>| (p - e.a).x * u.x + (p - e.a).y * u.y;
-    let (s, t) = (along(f.a), along(f.b));
-    (s.max(t).min(len) - s.min(t).max(0.0)).max(0.0)
+
+    /// The length along `e` that `f` runs on within `reach` (both of `f`'s ends within `reach`
+    /// of `e`'s line); 0 if the edges do not come that near.
+    fn along_within(&self, reach: f64) -> f64 {
+        if self.within(reach) && self.off_line <= reach {
+            self.along
+        } else {
+            0.0
+        }
+    }
 }
 
 /// Boundary edges in a row, under one box.
