@@ -63,10 +63,10 @@ const SHARED: Touching = Touching {
 /// Neighbours for the layout where the outline's parts were joined across hairline gaps
 /// ([`close_gaps`]) or the regions overlap ([`OVERLAP_SEARCHED`]): borders that run within the
 /// gap (or the overlap) of each other for ten times its width (corners that come near across a
-/// gap run so for a few widths at most, so they are not borders). The gap's width is not known, so reaches from [`GAP_CLOSED`] down, halving, are
-/// tried: with the closing's gap alone, a short border across a narrow gap was lost (Delaware
-/// and New Jersey, 0.04 cells long and 0.002 cells apart: the layout then had no reason to keep
-/// them together).
+/// gap run so for a few widths at most, so they are not borders). The gap's width is not known,
+/// so reaches from [`GAP_CLOSED`] down, halving, are tried: with the closing's gap alone, a
+/// short border across a narrow gap was lost (Delaware and New Jersey, 0.04 cells long and 0.002
+/// cells apart: the layout then had no reason to keep them together).
 const ACROSS_GAPS: Touching = Touching {
     reaches: &halving_reaches(),
 };
@@ -225,8 +225,8 @@ pub fn prepare(
     let (adjacency, (regions_union, landmass_of, simplified, joined)) = (adjacency?, other_side?);
     // Parts joined across hairline gaps, or regions overlapping along their borders: their
     // borders run within a hairline of each other without meeting.
-    let near = joined || overlap_share(regions, &regions_union) > OVERLAP_SEARCHED;
-    let neighbours = if near {
+    let search_near = joined || overlap_share(regions, &regions_union) > OVERLAP_SEARCHED;
+    let neighbours = if search_near {
         let near = self::adjacency(
             drawn,
             &self::clusters(drawn, ACROSS_GAPS.widest()),

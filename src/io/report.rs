@@ -272,7 +272,8 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
         m.shape
     );
     // §8 counts holes in enclosed positions, so a ring of regions round a lake has thousands:
-    // the lakes' area, in the same cells, tells those the source has from defects.
+    // the regions' holes' area, in the same cells, tells those the source has from defects
+    // (slivers between regions included, as the judge counts them).
     let lakes = match m.source_hole_cells() {
         0 => String::new(),
         cells => format!(" (the regions' holes: {cells} cells)"),
