@@ -461,7 +461,7 @@ impl Input {
                  (too close together to compute with)",
             ));
         }
-        if let Some((share, pair)) = outline::overlaps(&unit_refs, &prepared.regions_union) {
+        if let Some((share, pair)) = outline::overlaps(&unit_refs, prepared.overlap) {
             let example = pair.map_or(String::new(), |(i, j)| {
                 let id = |k: usize| &regions[order[k]].id;
                 format!(" ({:?} lies on {:?})", id(j), id(i))

@@ -151,6 +151,8 @@ pub struct Prepared {
     /// Per region, the part of the simplified outline (its landmass in the layout) that holds
     /// its centroid.
     pub part_of: Vec<usize>,
+    /// The share of the regions' total area covered twice or more ([`overlap_share`]).
+    pub overlap: f64,
 }
 
 /// Prepares `regions` (unit-cell frame, validated: non-empty, finite, positive area; `valid_here`
@@ -225,7 +227,8 @@ pub fn prepare(
     let (adjacency, (regions_union, landmass_of, simplified, joined)) = (adjacency?, other_side?);
     // Parts joined across hairline gaps, or regions overlapping along their borders: their
     // borders run within a hairline of each other without meeting.
-    let search_near = joined || overlap_share(regions, &regions_union) > OVERLAP_SEARCHED;
+    let overlap = overlap_share(regions, &regions_union);
+    let search_near = joined || overlap > OVERLAP_SEARCHED;
     let neighbours = if search_near {
         let near = self::adjacency(
             drawn,
@@ -258,6 +261,7 @@ pub fn prepare(
         neighbours,
         rings,
         part_of,
+        overlap,
     })
 }
 
@@ -403,16 +407,15 @@ impl<'r> SideBySide<'r> {
     }
 }
 
-/// How much the `regions` overlap, when the share of their total area that `union` does not
-/// cover (area counted twice or more) is above [`OVERLAP_NOTED`]: that share, and one pair
-/// `(i, j)` to name, region `j`'s interior point lying on region `i`, if some region's does
-/// (a duplicated feature, a region drawn over another; overlaps that hold no interior point
-/// leave it `None`). Costs two area sums on a layer without overlaps.
+/// How much the `regions` overlap, when `share`, the share of their total area that their
+/// union does not cover (area counted twice or more, [`overlap_share`]), is above
+/// [`OVERLAP_NOTED`]: that share, and one pair `(i, j)` to name, region `j`'s interior point
+/// lying on region `i`, if some region's does (a duplicated feature, a region drawn over
+/// another; overlaps that hold no interior point leave it `None`).
 pub fn overlaps(
     regions: &[&MultiPolygon<f64>],
-    union: &MultiPolygon<f64>,
+    share: f64,
 ) -> Option<(f64, Option<(usize, usize)>)> {
-    let share = overlap_share(regions, union);
     if share.is_nan() || share <= OVERLAP_NOTED {
         return None;
     }
@@ -1695,7 +1698,7 @@ mod tests {
         let side_by_side = [square(0.0, 0.0), square(1.0, 0.0)];
         let refs: Vec<&MultiPolygon<f64>> = side_by_side.iter().collect();
         let union = merge(&refs, &[true, true], &[vec![0, 1]], |_| true).unwrap();
-        assert_eq!(overlaps(&refs, &union), None);
+        assert_eq!(overlaps(&refs, overlap_share(&refs, &union)), None);
         // A 0.6 × 0.6 square drawn over the first: 0.36 of 2.36 counted twice (hand count).
         let small = MultiPolygon(vec![
             polygon![(x: 0.2, y: 0.2), (x: 0.8, y: 0.2), (x: 0.8, y: 0.8), (x: 0.2, y: 0.8)],
@@ -1703,7 +1706,7 @@ mod tests {
         let stacked = [square(0.0, 0.0), square(1.0, 0.0), small];
         let refs: Vec<&MultiPolygon<f64>> = stacked.iter().collect();
         let union = merge(&refs, &[true, true, true], &[vec![0, 1, 2]], |_| true).unwrap();
-        let (share, pair) = overlaps(&refs, &union).expect("an overlap");
+        let (share, pair) = overlaps(&refs, overlap_share(&refs, &union)).expect("an overlap");
         assert!((share - 0.36 / 2.36).abs() < 1e-9, "{share}");
         let (i, j) = pair.expect("a pair");
         assert_eq!((i.min(j), i.max(j)), (0, 2));
