@@ -10,7 +10,7 @@ use gdal::vector::LayerAccess;
 use gdal::Dataset;
 use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::{Child, Command, Stdio};
 
 mod common;
 use common::cli::{assert_fails, assert_success, p, snakegrid, stderr, stdout};
@@ -662,18 +662,11 @@ fn a_signal_stops_the_run_removes_its_staging_and_ends_the_process_by_it() {
             .spawn()
             .unwrap();
         // The run has started writing beside the destination once its staging folder is there.
-        while staging_left(&scratch.path("")).is_empty() {
-            if let Some(status) = child.try_wait().unwrap() {
-                panic!("the run ended ({status}) before its staging folder appeared");
-            }
-            std::thread::sleep(std::time::Duration::from_millis(10));
-        }
-        // The shell's own kill, which every system has.
-        let kill = Command::new("sh")
-            .args(["-c", &format!("kill -s {name} {}", child.id())])
-            .status()
-            .unwrap();
-        assert!(kill.success());
+        signal_once_started(
+            &mut child,
+            || !staging_left(&scratch.path("")).is_empty(),
+            name,
+        );
         let out = child.wait_with_output().unwrap();
         // Ended by the signal itself, so a shell sees 128 + its number (130, 143, 129).
         assert_eq!(
@@ -695,13 +688,29 @@ fn a_signal_stops_the_run_removes_its_staging_and_ends_the_process_by_it() {
     }
 }
 
+/// Waits until `started` holds (the run ending first fails the test), then sends `child` the
+/// signal `name` (INT, TERM, HUP) with the shell's own kill, which every system has.
+fn signal_once_started(child: &mut Child, started: impl Fn() -> bool, name: &str) {
+    while !started() {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("the run ended ({status}) before its staging folder appeared");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let kill = Command::new("sh")
+        .args(["-c", &format!("kill -s {name} {}", child.id())])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+}
+
 #[test]
 fn a_signal_sends_nothing_to_standard_output_and_leaves_no_temporary_folder() {
     let scratch = Scratch::new("signal-stdout");
     let src = scratch.input("us_counties");
     let tmp = scratch.path("tmp");
     std::fs::create_dir(&tmp).unwrap();
-    let child = Command::new(env!("CARGO_BIN_EXE_snakegrid"))
+    let mut child = Command::new(env!("CARGO_BIN_EXE_snakegrid"))
         .env("TMPDIR", &tmp)
         .args(["-q", "-f", "GeoJSON", "-id", "id", "/vsistdout/", p(&src)])
         .stdout(Stdio::piped())
@@ -714,18 +723,7 @@ fn a_signal_sends_nothing_to_standard_output_and_leaves_no_temporary_folder() {
             .unwrap()
             .any(|folder| !staging_left(&folder.unwrap().path()).is_empty())
     };
-    let mut child = child;
-    while !started() {
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!("the run ended ({status}) before its staging folder appeared");
-        }
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
-    let kill = Command::new("sh")
-        .args(["-c", &format!("kill -s INT {}", child.id())])
-        .status()
-        .unwrap();
-    assert!(kill.success());
+    signal_once_started(&mut child, started, "INT");
     let out = child.wait_with_output().unwrap();
     assert_eq!(out.status.signal(), Some(signal_hook::consts::SIGINT));
     assert!(out.stdout.is_empty(), "{} bytes sent", out.stdout.len());
