@@ -40,6 +40,8 @@ make apart "$data/us_states.gpkg" 0.001 "$work/us_states_apart.gpkg"
 make apart "$data/us_states.gpkg" -0.001 "$work/us_states_over.gpkg"
 # us_counties with every county simplified alone by a sixteenth of a cell (ogr2ogr -simplify)
 make simplify "$data/us_counties.gpkg" 0.06 "$work/us_counties_simplified.gpkg"
+# the world's countries cut into 3,000 provinces, small countries finer for their size
+make provinces "$data/world_countries.gpkg" 3000 1 "$work/world_provinces.gpkg"
 declare -A judged_against=(["us_states_apart"]="$data/us_states.gpkg"
     ["us_states_over"]="$data/us_states.gpkg" ["us_counties_simplified"]="$data/us_counties.gpkg")
 layers=(
@@ -48,7 +50,7 @@ layers=(
     "$work/voronoi_300.gpkg" "$work/voronoi_3000.gpkg" "$work/islands.gpkg" "$work/river.gpkg"
     "$work/river_33.gpkg"
     "$work/archipelago.gpkg" "$work/strip.gpkg" "$work/ring.gpkg" "$work/us_states_apart.gpkg"
-    "$work/us_states_over.gpkg" "$work/us_counties_simplified.gpkg"
+    "$work/us_states_over.gpkg" "$work/us_counties_simplified.gpkg" "$work/world_provinces.gpkg"
 )
 
 rows="$work/rows.tsv"
@@ -140,7 +142,9 @@ markdown_rows() {
     echo "neighbours drawn over each other's borders), both judged against us_states itself, and"
     echo "us_counties with every county simplified alone by a sixteenth of a cell, as \`ogr2ogr"
     echo "-simplify\` does (\`us_counties_simplified\`: slivers between neighbours), judged against"
-    echo "us_counties."
+    echo "us_counties; and world_countries cut into 3,000 Voronoi provinces, each country's share"
+    echo "following the square root of its area (\`world_provinces\`: the world's landmasses with"
+    echo "densities far apart, as a layer of provinces or districts has them)."
     echo
     echo "Columns: C_adjacent in the 8-neighbourhood and the 4-neighbourhood (shared edge), the"
     echo "false-neighbour share, C_orientation (degrees) and the misdirected share (> 45°),"

@@ -28,6 +28,13 @@
     make-test-layers.py simplify SRC CELLS OUT.gpkg SRC with every region simplified alone by
                                                     CELLS cells (Douglas-Peucker), as ogr2ogr
                                                     -simplify does: slivers between neighbours
+    make-test-layers.py provinces SRC N SEED OUT.gpkg
+                                                    SRC with every region cut into Voronoi
+                                                    cells, about N in all, each region's share
+                                                    following the square root of its area
+                                                    (small countries cut finer for their size,
+                                                    as administrative layers are): borders
+                                                    shared exactly, densities far apart
     make-test-layers.py densify SRC VERTICES OUT.gpkg
                                                     SRC with every edge subdivided, to about
                                                     VERTICES vertices in all, with a small wiggle
@@ -306,6 +313,26 @@ def simplified(src, cells):
     return [str(v) for v in fields[0]], list(simple), info["crs"]
 
 
+def provinces(src, n, seed):
+    rng = np.random.default_rng(seed)
+    info = pyogrio.read_info(src)
+    _, _, wkb, fields = pyogrio.raw.read(src, columns=["id"])
+    geometries = shapely.from_wkb(wkb)
+    weights = np.sqrt(shapely.area(geometries))
+    counts = np.maximum(1, np.round(n * weights / weights.sum())).astype(int)
+    ids, cells = [], []
+    for region, geometry, count in zip(fields[0], geometries, counts):
+        shapely.prepare(geometry)
+        tiles = [geometry] if count == 1 else voronoi_tiles(
+            random_points(rng, count, geometry), geometry
+        )
+        for k, tile in enumerate(tiles):
+            parts = [g for g in shapely.get_parts(tile) if g.geom_type == "Polygon"]
+            ids.append(f"{region}_{k}")
+            cells.append(shapely.MultiPolygon(parts))
+    return ids, cells, info["crs"]
+
+
 def star(vertices):
     t = np.linspace(0, 2 * math.pi, vertices, endpoint=False)
     r = SIDE * (0.5 + 0.4 * np.where(np.arange(vertices) % 2 == 0, 1.0, 0.2))
@@ -351,6 +378,9 @@ def main(argv):
     elif kind == "simplify":
         ids, geometries, crs = simplified(args[0], float(args[1]))
         write(args[2], ids, geometries, crs)
+    elif kind == "provinces":
+        ids, geometries, crs = provinces(args[0], int(args[1]), int(args[2]))
+        write(args[3], ids, geometries, crs)
     elif kind == "densify":
         ids, geometries, crs = densify(args[0], int(float(args[1])))
         write(args[2], ids, geometries, crs)
