@@ -562,7 +562,7 @@ fn centroid(region: &MultiPolygon<f64>) -> Coord<f64> {
 }
 
 /// A boundary segment of a region, for the adjacency search.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Edge {
     a: Coord<f64>,
     b: Coord<f64>,
@@ -646,40 +646,51 @@ fn adjacency(
     }
     let chunks_done = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
-    let chunks = searched.len().div_ceil(ADJACENCY_CHUNK).max(1) as f64;
-    // In parallel over fixed chunks of edges, summed chunk by chunk in order: the same sums
+    let chunks = runs.len().div_ceil(ADJACENCY_CHUNK / RUN_EDGES).max(1) as f64;
+    // In parallel over fixed chunks of runs, summed chunk by chunk in order: the same sums
     // (to the last bit) with any number of threads.
     let (reaches, reach) = (touching.reaches, touching.widest());
     debug_assert!(reaches.len() <= MOST_REACHES);
+    let widened = |b: AABB<[f64; 2]>| {
+        AABB::from_corners(
+            [b.lower()[0] - reach, b.lower()[1] - reach],
+            [b.upper()[0] + reach, b.upper()[1] + reach],
+        )
+    };
     // Per pair, the length shared within each reach.
     type Lengths = [f64; MOST_REACHES];
-    let per_chunk: Vec<BTreeMap<(usize, usize), Lengths>> = searched
-        .par_chunks(ADJACENCY_CHUNK)
+    let per_chunk: Vec<BTreeMap<(usize, usize), Lengths>> = runs
+        .par_chunks(ADJACENCY_CHUNK / RUN_EDGES)
         .map(|chunk| {
             let mut shared: BTreeMap<(usize, usize), Lengths> = Default::default();
             if stop.load(AtomicOrdering::Relaxed) {
                 return shared;
             }
-            for e in chunk {
-                let env = e.envelope();
-                let t = reach;
-                let search = AABB::from_corners(
-                    [env.lower()[0] - t, env.lower()[1] - t],
-                    [env.upper()[0] + t, env.upper()[1] + t],
-                );
+            // The runs near a run, asked of the tree once for all its edges rather than once
+            // per edge: boundaries a hairline apart leave every edge to search.
+            let mut near_runs: Vec<std::ops::Range<usize>> = Vec::new();
+            for run in chunk {
+                let region = searched[run.edges.start].region;
+                near_runs.clear();
                 // Each pair once, from its first region; a run holds one region's edges.
-                let near = (tree.locate_in_envelope_intersecting(&search))
-                    .filter(|run| searched[run.data.start].region > e.region)
-                    .flat_map(|run| &searched[run.data.clone()])
-                    .filter(|f| f.envelope().intersects(&search));
-                for f in near {
-                    let beside = Beside::of(e, f);
-                    if !beside.within(reach) {
-                        continue;
-                    }
-                    let lengths = shared.entry((e.region, f.region)).or_default();
-                    for (length, r) in lengths.iter_mut().zip(reaches) {
-                        *length += beside.along_within(r.reach);
+                near_runs.extend(
+                    (tree.locate_in_envelope_intersecting(&widened(run.envelope)))
+                        .filter(|near| searched[near.data.start].region > region)
+                        .map(|near| near.data.clone()),
+                );
+                for e in &searched[run.edges.clone()] {
+                    let search = widened(e.envelope());
+                    let near = (near_runs.iter())
+                        .flat_map(|edges| &searched[edges.clone()])
+                        .filter(|f| f.envelope().intersects(&search));
+                    for f in near {
+                        let Some(beside) = Beside::of(e, f, reach, point_adjacency) else {
+                            continue;
+                        };
+                        let lengths = shared.entry((e.region, f.region)).or_default();
+                        for (length, r) in lengths.iter_mut().zip(reaches) {
+                            *length += beside.along_within(r.reach);
+                        }
                     }
                 }
             }
@@ -824,7 +835,8 @@ fn shared_vertex_for_vertex(edges: Vec<Edge>) -> (BTreeMap<(usize, usize), f64>,
 
 /// How a boundary edge `f` lies beside another, `e`: worked out once for every reach tried.
 struct Beside {
-    /// The squared distance between the two edges; 0 where they cross.
+    /// The squared distance between the two edges: 0 where they cross (when crossings are
+    /// tested), otherwise the least from an end of one to the other.
     distance2: f64,
     /// How far the farther end of `f` lies from `e`'s line.
     off_line: f64,
@@ -833,8 +845,34 @@ struct Beside {
 }
 
 impl Beside {
-    fn of(e: &Edge, f: &Edge) -> Beside {
-        let distance2 = if segments_intersect(e.a, e.b, f.a, f.b) {
+    /// How `f` lies beside `e`, if they come within `reach` of each other. With `crossings`
+    /// (point adjacency: a touch at a point makes neighbours), edges that cross or touch are
+    /// within every reach, by the exact crossing test. Without, only the lengths along matter,
+    /// and those the ends' distances give alike: an edge that crosses `e` with both ends
+    /// within a reach of `e`'s line has an end within that reach of `e`, or `e` one within it
+    /// of the edge (a unit test holds this on random edges). So neither the crossing test (a
+    /// tenth of the run of us_states at 10⁶ vertices drawn apart) nor the distances of an edge
+    /// that runs along no length of `e` within `reach` are worked out: most edges a search
+    /// meets lie beyond `e`'s ends.
+    fn of(e: &Edge, f: &Edge, reach: f64, crossings: bool) -> Option<Beside> {
+        let d = e.b - e.a;
+        let len = (d.x * d.x + d.y * d.y).sqrt();
+        let (off_line, along) = if len == 0.0 {
+            (0.0, 0.0)
+        } else {
+            let u = d / len;
+            let off_line = |p: Coord<f64>| ((p - e.a).x * u.y - (p - e.a).y * u.x).abs();
+            let along = |p: Coord<f64>| (p - e.a).x * u.x + (p - e.a).y * u.y;
+            let (s, t) = (along(f.a), along(f.b));
+            (
+                off_line(f.a).max(off_line(f.b)),
+                (s.max(t).min(len) - s.min(t).max(0.0)).max(0.0),
+            )
+        };
+        if !crossings && (off_line > reach || along == 0.0) {
+            return None;
+        }
+        let distance2 = if crossings && segments_intersect(e.a, e.b, f.a, f.b) {
             0.0
         } else {
             [
@@ -846,24 +884,12 @@ impl Beside {
             .into_iter()
             .fold(f64::INFINITY, f64::min)
         };
-        let d = e.b - e.a;
-        let len = (d.x * d.x + d.y * d.y).sqrt();
-        if len == 0.0 {
-            return Beside {
-                distance2,
-                off_line: 0.0,
-                along: 0.0,
-            };
-        }
-        let u = d / len;
-        let off_line = |p: Coord<f64>| ((p - e.a).x * u.y - (p - e.a).y * u.x).abs();
-        let along = |p: Coord<f64>| (p - e.a).x * u.x + (p - e.a).y * u.y;
-        let (s, t) = (along(f.a), along(f.b));
-        Beside {
+        let beside = Beside {
             distance2,
-            off_line: off_line(f.a).max(off_line(f.b)),
-            along: (s.max(t).min(len) - s.min(t).max(0.0)).max(0.0),
-        }
+            off_line,
+            along,
+        };
+        beside.within(reach).then_some(beside)
     }
 
     /// Whether the edges come within `reach` of each other.
@@ -1844,6 +1870,51 @@ mod tests {
         assert_eq!(holes.len(), 1, "the 1-cell² lake stays, the sliver goes");
         // The island region's centroid lies in its big square; the tiny part holds no centroid.
         assert_eq!(prepared.rings.iter().filter(|r| !r.hole).count(), 2);
+    }
+
+    #[test]
+    fn without_crossings_the_lengths_along_are_those_of_the_exact_test() {
+        // Random edges beside a unit edge at the scale of each reach, long or short, many
+        // crossing it or ending near its ends: every length along within every reach is the
+        // same whether or not crossings are tested exactly (Beside::of).
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let e = Edge {
+            a: Coord { x: 0.0, y: 0.0 },
+            b: Coord { x: 1.0, y: 0.0 },
+            region: 0,
+        };
+        let mut crossing = 0;
+        for touching in [SHARED, ACROSS_GAPS] {
+            let reach = touching.widest();
+            for _ in 0..50_000 {
+                let scale = touching.reaches[rng.random_range(0..touching.reaches.len())].reach;
+                let end = [0.0, 1.0][rng.random_range(0..2)];
+                let near_end = rng.random_bool(0.5);
+                let mut point = || Coord {
+                    x: if near_end {
+                        end + rng.random_range(-3.0 * scale..3.0 * scale)
+                    } else {
+                        rng.random_range(-0.1..1.1)
+                    },
+                    y: rng.random_range(-2.0 * scale..2.0 * scale),
+                };
+                let f = Edge {
+                    a: point(),
+                    b: point(),
+                    region: 1,
+                };
+                crossing += usize::from(segments_intersect(e.a, e.b, f.a, f.b));
+                let exact = Beside::of(&e, &f, reach, true);
+                let ends = Beside::of(&e, &f, reach, false);
+                for r in touching.reaches {
+                    let along =
+                        |b: &Option<Beside>| b.as_ref().map_or(0.0, |b| b.along_within(r.reach));
+                    assert_eq!(along(&ends), along(&exact), "{f:?} within {}", r.reach);
+                }
+            }
+        }
+        assert!(crossing > 10_000, "{crossing} crossings");
     }
 
     #[test]
