@@ -43,9 +43,9 @@
     make-test-layers.py star VERTICES OUT.gpkg      one region: a star with VERTICES vertices
     make-test-layers.py square VERTICES OUT.gpkg    one region: a square densified to VERTICES
 
-Every layer is a GeoPackage with one layer named like the file, a text field `id`, projected
-coordinates in metres (EPSG:3857 for the generated ones, the source's for densify). The same
-arguments give the same file. Needs shapely, numpy, pyogrio and pyproj.
+Every layer is a GeoPackage with one layer named like the file and a text field `id`, in
+EPSG:3857 (metres) for the generated ones and in the source's CRS for those made from SRC. The
+same arguments give the same file. Needs shapely, numpy, pyogrio and pyproj.
 """
 
 import math
