@@ -113,6 +113,12 @@ pub fn segment_distance2(a: Coord<f64>, b: Coord<f64>, c: Coord<f64>, d: Coord<f
     if segments_intersect(a, b, c, d) {
         return 0.0;
     }
+    ends_distance2(a, b, c, d)
+}
+
+/// The least squared distance from an end of the segment `a`–`b` to `c`–`d` or from an end of
+/// `c`–`d` to `a`–`b`: [`segment_distance2`] of segments that do not meet.
+pub fn ends_distance2(a: Coord<f64>, b: Coord<f64>, c: Coord<f64>, d: Coord<f64>) -> f64 {
     (point_segment_distance2(a, c, d).min(point_segment_distance2(b, c, d)))
         .min(point_segment_distance2(c, a, b).min(point_segment_distance2(d, a, b)))
 }

@@ -3,8 +3,8 @@
 //! two vertices per region.
 
 use super::geometry::{
-    interior_point, interior_point_of_all, lowest, nearest_on_segment, point_segment_distance2,
-    segment_distance2, segments_intersect, RingIndex,
+    ends_distance2, interior_point, interior_point_of_all, lowest, nearest_on_segment,
+    segment_distance2, RingIndex,
 };
 use super::network::DisjointSets;
 use super::overlay::{self, Given};
@@ -872,17 +872,10 @@ impl Beside {
         if !crossings && (off_line > reach || along == 0.0) {
             return None;
         }
-        let distance2 = if crossings && segments_intersect(e.a, e.b, f.a, f.b) {
-            0.0
+        let distance2 = if crossings {
+            segment_distance2(e.a, e.b, f.a, f.b)
         } else {
-            [
-                point_segment_distance2(e.a, f.a, f.b),
-                point_segment_distance2(e.b, f.a, f.b),
-                point_segment_distance2(f.a, e.a, e.b),
-                point_segment_distance2(f.b, e.a, e.b),
-            ]
-            .into_iter()
-            .fold(f64::INFINITY, f64::min)
+            ends_distance2(e.a, e.b, f.a, f.b)
         };
         let beside = Beside {
             distance2,
@@ -1562,6 +1555,7 @@ fn move_inside(c: Coord<f64>, index: &RingIndex) -> Coord<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::geometry::segments_intersect;
     use geo::{polygon, SimplifyVw};
 
     fn square(x: f64, y: f64) -> MultiPolygon<f64> {
