@@ -898,6 +898,19 @@ snakegrid_status snakegrid_result_region_id(const struct snakegrid_result *resul
                                             const char **out);
 
 /**
+ * What was wrong with region `index`'s polygon if it was invalid and repaired (by the
+ * even-odd rule), e.g. "a ring intersects itself at (3.5, 2)"; NULL for a valid polygon.
+ * The notes name the first repairs and count the rest; this names each. The string belongs
+ * to the result.
+ *
+ * Thread safety: any number of threads may read one result at once.
+ */
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_result_region_repair(const struct snakegrid_result *result,
+                                                size_t index,
+                                                const char **out);
+
+/**
  * The cell of region `index`: column from the left and row from the top, both from 0 at the
  * leftmost and topmost used cells.
  *

@@ -716,6 +716,8 @@ fn the_json_report_has_the_metrics_and_the_snake_run() {
     assert!(regions
         .iter()
         .any(|r| r["id"] == "06" && r["label"] == "CA"));
+    // The shared us_states are valid: no region was repaired.
+    assert!(regions.iter().all(|r| r["repair"].is_null()));
     assert!(json["cell_size"].as_f64().unwrap() > 0.0);
 }
 

@@ -163,6 +163,7 @@ SIGNATURES = {
     "snakegrid_result_count": (_STATUS, [_P, _OUT_SIZE]),
     "snakegrid_result_cell_size": (_STATUS, [_P, _OUT_DOUBLE]),
     "snakegrid_result_region_id": (_STATUS, [_P, _SIZE, _OUT_TEXT]),
+    "snakegrid_result_region_repair": (_STATUS, [_P, _SIZE, _OUT_TEXT]),
     "snakegrid_result_cell_wkb": (_STATUS, [_P, _SIZE, _OUT_BYTES, _OUT_SIZE]),
     "snakegrid_result_region_metrics": (_STATUS, [_P, _SIZE, ctypes.POINTER(RegionMetrics)]),
     "snakegrid_result_layout_metrics": (_STATUS, [_P, ctypes.POINTER(LayoutMetrics)]),

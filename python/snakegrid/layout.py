@@ -62,12 +62,14 @@ def fields(library=None):
 @dataclass
 class Cell:
     """Region `id`'s square (a shapely Polygon, or WKB when the regions were given as WKB), its
-    added fields {name: value} in the library's order, and its metrics."""
+    added fields {name: value} in the library's order, its metrics, and what was wrong with its
+    polygon if the library repaired it (None for a valid one)."""
 
     id: str
     geometry: Any
     fields: Dict[str, Any]
     metrics: Any  # RegionMetrics
+    repair: Optional[str] = None
 
 
 @dataclass
@@ -213,7 +215,8 @@ def _read(lib, result, as_shapely):
             geometry=_geometry.from_wkb(lib.bytes(c.snakegrid_result_cell_wkb, result, i),
                                         as_shapely),
             fields=values,
-            metrics=_copy(RegionMetrics, metrics)))
+            metrics=_copy(RegionMetrics, metrics),
+            repair=_repair(lib, result, i)))
     notes_count = ctypes.c_size_t()
     lib.check(c.snakegrid_result_note_count(result, ctypes.byref(notes_count)))
     return GridMap(
@@ -225,6 +228,13 @@ def _read(lib, result, as_shapely):
         notes=[lib.text(c.snakegrid_result_note, result, i) for i in range(notes_count.value)],
         hexjson=_hexjson(lib, result),
         group_metrics=_group_metrics(lib, result))
+
+
+def _repair(lib, result, index):
+    """What was wrong with region `index`'s polygon if it was repaired, else None."""
+    out = ctypes.c_char_p()
+    lib.check(lib.c.snakegrid_result_region_repair(result, index, ctypes.byref(out)))
+    return None if out.value is None else out.value.decode("utf-8", "replace")
 
 
 def _group_metrics(lib, result):

@@ -217,6 +217,9 @@ def test_notes_say_what_the_library_repaired():
     frame = pyogrio.read_dataframe(os.path.join(BAD, "bowtie.geojson"))
     grid = snakegrid.layout(list(frame.geometry), list(frame["code"]))
     assert any("feature bowtie: invalid polygon repaired" in n for n in grid.notes), grid.notes
+    repairs = {cell.id: cell.repair for cell in grid.cells}
+    assert repairs["bowtie"].startswith("a ring intersects itself at (")
+    assert repairs["r00"] is None
 
 
 def test_working_crs_is_the_command_lines(tmp_path):

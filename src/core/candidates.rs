@@ -194,6 +194,7 @@ fn generate_here(
         frame,
         prepared,
         mut notes,
+        repairs,
     } = Input::of(regions, params, &|fraction, message| {
         progress(prepared_share * fraction, message)
     })?;
@@ -388,7 +389,11 @@ fn generate_here(
         .collect();
     let best = &layouts[ranking[0]];
     let (_, run) = &runs[jobs[kept[ranking[0]]].0];
-    Ok(context.grid_map(regions, &order, best, run, candidates, notes))
+    let mut map = context.grid_map(regions, &order, best, run, candidates, notes);
+    for (cell, repair) in map.cells.iter_mut().zip(repairs) {
+        cell.repair = repair;
+    }
+    Ok(map)
 }
 
 /// The layouts' indices, best first, and their TOPSIS scores: the layout's defects first
@@ -421,6 +426,8 @@ pub struct Input {
     pub prepared: Prepared,
     /// What the user should know about the input, e.g. which polygons were repaired.
     pub notes: Vec<String>,
+    /// Per region in input order, what was wrong with its polygon if it was repaired.
+    pub repairs: Vec<Option<String>>,
 }
 
 impl Input {
@@ -433,6 +440,7 @@ impl Input {
             valid_here,
             drawn,
             mut notes,
+            repairs,
         } = check(regions, &|share| {
             progress(checking_share * share, "checking geometry")
         })?;
@@ -488,6 +496,7 @@ impl Input {
             frame,
             prepared,
             notes,
+            repairs,
         })
     }
 }
@@ -596,6 +605,8 @@ struct Checked {
     valid_here: Vec<bool>,
     drawn: Vec<Option<MultiPolygon<f64>>>,
     notes: Vec<String>,
+    /// Per region in input order, what was wrong with its polygon if it was repaired.
+    repairs: Vec<Option<String>>,
 }
 
 /// Refuses what the method cannot work with, naming the feature. An invalid polygon (a ring that
@@ -692,15 +703,9 @@ fn check(regions: &[Region], checking: &(dyn Fn(f64) -> bool + Sync)) -> Result<
             Ok((Cow::Borrowed(&region.geometry), None))
         },
     ))?;
-    let notes: Vec<String> = (regions.iter().zip(&checked))
-        .filter_map(|(region, (_, problem))| {
-            let problem = problem.as_ref()?;
-            Some(format!(
-                "feature {}: invalid polygon repaired ({problem})",
-                region.id
-            ))
-        })
-        .collect();
+    let problems: Vec<Option<&Problem>> = checked.iter().map(|(_, p)| p.as_ref()).collect();
+    let notes = repair_notes(regions, &problems);
+    let repairs: Vec<Option<String>> = problems.iter().map(|p| p.map(Problem::to_string)).collect();
     if let Some(placed) = placed.filter(|_| notes.is_empty()) {
         let valid_here = placed.order.iter().map(|&i| valid_here[i]).collect();
         return Ok(Checked {
@@ -708,6 +713,7 @@ fn check(regions: &[Region], checking: &(dyn Fn(f64) -> bool + Sync)) -> Result<
             placed,
             valid_here,
             notes,
+            repairs,
         });
     }
     let was_repaired: Vec<bool> = checked.iter().map(|(_, p)| p.is_some()).collect();
@@ -721,7 +727,58 @@ fn check(regions: &[Region], checking: &(dyn Fn(f64) -> bool + Sync)) -> Result<
         drawn,
         placed,
         notes,
+        repairs,
     })
+}
+
+/// How many repairs [`repair_notes`] lists one note each before it sums up the rest.
+const REPAIRS_LISTED: usize = 10;
+
+/// Notes on the repaired polygons (`problems` in input order): the first [`REPAIRS_LISTED`] one
+/// by one, the rest in one note that counts them by kind, so that a layer of hundreds of invalid
+/// polygons (a world of provinces drawn country by country) does not bury the other notes on
+/// the console or in a QGIS log. Every region's own repair stays reported with its cell
+/// ([`crate::RegionCell::repair`]).
+fn repair_notes(regions: &[Region], problems: &[Option<&Problem>]) -> Vec<String> {
+    let repaired: Vec<(&str, &Problem)> = (regions.iter().zip(problems))
+        .filter_map(|(region, problem)| Some((region.id.as_str(), (*problem)?)))
+        .collect();
+    // One more is listed rather than summed up alone.
+    let listed = match repaired.len() <= REPAIRS_LISTED + 1 {
+        true => repaired.len(),
+        false => REPAIRS_LISTED,
+    };
+    let mut notes: Vec<String> = (repaired[..listed].iter())
+        .map(|(id, problem)| format!("feature {id}: invalid polygon repaired ({problem})"))
+        .collect();
+    let rest = &repaired[listed..];
+    if !rest.is_empty() {
+        let mut kinds: Vec<(&str, usize)> = Vec::new();
+        for (_, problem) in rest {
+            match kinds.iter_mut().find(|(kind, _)| *kind == problem.kind()) {
+                Some((_, count)) => *count += 1,
+                None => kinds.push((problem.kind(), 1)),
+            }
+        }
+        kinds.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+        let named: Vec<&str> = rest.iter().take(5).map(|(id, _)| *id).collect();
+        let more = if rest.len() > named.len() {
+            ", …"
+        } else {
+            ""
+        };
+        let counts: Vec<String> = (kinds.iter())
+            .map(|(kind, count)| format!("{count} where {kind}"))
+            .collect();
+        notes.push(format!(
+            "{} more invalid polygons repaired (features {}{more}): {}; the JSON report \
+             (regions[].repair) names each region's problem",
+            rest.len(),
+            named.join(", "),
+            counts.join(", ")
+        ));
+    }
+    notes
 }
 
 /// Refuses a region with no coordinates, or with coordinates no area can be computed from.
@@ -1592,6 +1649,7 @@ impl Context<'_> {
                 centroid: f.to_map(self.prepared.centroids[k]),
                 moved_centroid: f.to_map(run.positions[k]),
                 metrics: best.region_metrics[k],
+                repair: None,
             });
         }
         let mut adjacency: Vec<(usize, usize)> = self
@@ -1677,6 +1735,50 @@ mod tests {
             .iter()
             .any(|n| n.contains("feature a: invalid polygon repaired")));
         assert_eq!(map.adjacency, vec![(0, 1)]);
+        // Each region's own repair comes with its cell, as its note says it.
+        let repair = map.cells[0].repair.as_deref().expect("a was repaired");
+        assert!(repair.starts_with("a ring "), "{repair}");
+        let note = format!("feature a: invalid polygon repaired ({repair})");
+        assert!(map.notes.contains(&note), "{:?}", map.notes);
+        assert_eq!(map.cells[1].repair, None);
+    }
+
+    #[test]
+    fn many_repairs_are_listed_up_to_ten_and_then_counted_by_kind() {
+        let regions: Vec<Region> = (0..16)
+            .map(|k| Region {
+                id: format!("r{k}"),
+                geometry: MultiPolygon(vec![]),
+                group: None,
+                pin: None,
+            })
+            .collect();
+        let crossing = Problem::SelfIntersection(Coord { x: 1.0, y: 2.0 });
+        let outside = Problem::HoleOutside;
+        // r1 is valid; of the 15 others, the last four are summed up.
+        let mut problems: Vec<Option<&Problem>> = vec![Some(&crossing); 16];
+        problems[1] = None;
+        problems[14] = Some(&outside);
+        let notes = repair_notes(&regions, &problems);
+        assert_eq!(notes.len(), 11);
+        assert_eq!(
+            notes[0],
+            "feature r0: invalid polygon repaired (a ring intersects itself at (1, 2))"
+        );
+        assert!(notes[9].starts_with("feature r10: "));
+        assert_eq!(
+            notes[10],
+            "5 more invalid polygons repaired (features r11, r12, r13, r14, r15): 4 where a ring \
+             intersects itself, 1 where a hole lies outside its polygon's shell; the JSON report \
+             (regions[].repair) names each region's problem"
+        );
+        // Eleven are all listed: a summary of one would be no shorter.
+        let notes = repair_notes(&regions[..12], &problems[..12]);
+        assert_eq!(notes.len(), 11);
+        assert!(notes
+            .iter()
+            .all(|n| n.contains("invalid polygon repaired (")));
+        assert!(repair_notes(&regions[1..2], &problems[1..2]).is_empty());
     }
 
     #[test]

@@ -290,6 +290,9 @@ pub struct RegionCell {
     /// Where the Snake moved it, map units.
     pub moved_centroid: Coord<f64>,
     pub metrics: RegionMetrics,
+    /// What was wrong with its polygon if it was invalid and repaired (by the even-odd rule,
+    /// as GIS tools repair), as the note on it says; `None` for a valid polygon.
+    pub repair: Option<String>,
 }
 
 /// One candidate layout (§7) and how it ranked.

@@ -38,16 +38,28 @@ pub enum Problem {
     PartsOverlap,
 }
 
+impl Problem {
+    /// What is wrong, without where: the same words for every polygon with this kind of
+    /// problem, so that many repairs can be counted by kind.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Problem::TooFewPoints => "a ring has fewer than 3 distinct vertices",
+            Problem::SelfIntersection(_) => "a ring intersects itself",
+            Problem::Spike(_) => "a ring doubles back on itself (a spike)",
+            Problem::RingsIntersect(_) => "two rings cross or overlap",
+            Problem::HoleOutside => "a hole lies outside its polygon's shell",
+            Problem::PartsOverlap => "one part of the multipolygon lies inside another",
+        }
+    }
+}
+
 impl fmt::Display for Problem {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        let at = |c: &Coord<f64>| format!("at ({}, {})", c.x, c.y);
         match self {
-            Problem::TooFewPoints => write!(f, "a ring has fewer than 3 distinct vertices"),
-            Problem::SelfIntersection(c) => write!(f, "a ring intersects itself {}", at(c)),
-            Problem::Spike(c) => write!(f, "a ring doubles back on itself (a spike) {}", at(c)),
-            Problem::RingsIntersect(c) => write!(f, "two rings cross or overlap {}", at(c)),
-            Problem::HoleOutside => write!(f, "a hole lies outside its polygon's shell"),
-            Problem::PartsOverlap => write!(f, "one part of the multipolygon lies inside another"),
+            Problem::SelfIntersection(c) | Problem::Spike(c) | Problem::RingsIntersect(c) => {
+                write!(f, "{} at ({}, {})", self.kind(), c.x, c.y)
+            }
+            _ => f.write_str(self.kind()),
         }
     }
 }

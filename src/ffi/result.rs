@@ -21,6 +21,8 @@ pub struct RunResult {
 pub(crate) struct Output {
     map: GridMap,
     ids: Vec<CString>,
+    /// Per region, what was wrong with its polygon if it was repaired.
+    repairs: Vec<Option<CString>>,
     cells_wkb: Vec<Vec<u8>>,
     moved_outline_wkb: Vec<u8>,
     notes: Vec<CString>,
@@ -37,6 +39,9 @@ impl Output {
     pub(crate) fn new(map: GridMap, notes: &[String]) -> Output {
         Output {
             ids: map.cells.iter().map(|c| c_string(&c.id)).collect(),
+            repairs: (map.cells.iter())
+                .map(|c| c.repair.as_deref().map(c_string))
+                .collect(),
             cells_wkb: map
                 .cells
                 .iter()
@@ -245,6 +250,28 @@ pub unsafe extern "C" fn snakegrid_result_region_id(
     unsafe {
         read("snakegrid_result_region_id", result, out, |o| {
             Ok(at(&o.ids, index, "regions")?.as_ptr())
+        })
+    }
+}
+
+/// What was wrong with region `index`'s polygon if it was invalid and repaired (by the
+/// even-odd rule), e.g. "a ring intersects itself at (3.5, 2)"; NULL for a valid polygon.
+/// The notes name the first repairs and count the rest; this names each. The string belongs
+/// to the result.
+///
+/// Thread safety: any number of threads may read one result at once.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn snakegrid_result_region_repair(
+    result: *const RunResult,
+    index: usize,
+    out: *mut *const c_char,
+) -> Status {
+    // SAFETY: passed on (header contract).
+    unsafe {
+        read("snakegrid_result_region_repair", result, out, |o| {
+            let repair = at(&o.repairs, index, "regions")?;
+            Ok(repair.as_ref().map_or(std::ptr::null(), |r| r.as_ptr()))
         })
     }
 }

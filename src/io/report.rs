@@ -86,6 +86,8 @@ struct RegionRow<'a> {
     centroid: [f64; 2],
     moved_centroid: [f64; 2],
     cell_centre: [f64; 2],
+    /// What was wrong with its polygon if it was repaired, else null.
+    repair: Option<&'a str>,
 }
 
 /// The JSON report of a finished run; `labels` are in input order.
@@ -146,6 +148,7 @@ fn rows<'a>(map: &'a GridMap, labels: &'a [String]) -> Vec<RegionRow<'a>> {
                 .bounding_rect()
                 .map(|r| xy(r.center()))
                 .unwrap_or([f64::NAN; 2]),
+            repair: cell.repair.as_deref(),
         })
         .collect()
 }

@@ -170,6 +170,7 @@ static void test_null_arguments(void) {
     CHECK_FAILS(snakegrid_result_count(NULL, &count), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_result_cell_size(NULL, &size), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_result_region_id(NULL, 0, &text), SNAKEGRID_NULL_ARGUMENT);
+    CHECK_FAILS(snakegrid_result_region_repair(NULL, 0, &text), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_result_cell(NULL, 0, &col, &row), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_result_cell_wkb(NULL, 0, &bytes, &count), SNAKEGRID_NULL_ARGUMENT);
     CHECK_FAILS(snakegrid_result_region_metrics(NULL, 0, &region), SNAKEGRID_NULL_ARGUMENT);

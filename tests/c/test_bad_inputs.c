@@ -109,6 +109,15 @@ static void test_in_memory_geometry(const snakegrid_options *options) {
     size_t count = 0;
     if (result != NULL) CHECK_OK(snakegrid_result_count(result, &count));
     CHECK(count == 3);
+    /* Each region's repair comes with its cell: NULL for the valid squares. */
+    const char *repair = "unset";
+    if (result != NULL) {
+        CHECK_OK(snakegrid_result_region_repair(result, 0, &repair));
+        CHECK(repair == NULL);
+        CHECK_OK(snakegrid_result_region_repair(result, 2, &repair));
+        CHECK(repair != NULL && strcmp(repair, "a ring intersects itself at (2.5, 0.5)") == 0);
+        CHECK_FAILS(snakegrid_result_region_repair(result, 3, &repair), SNAKEGRID_INVALID_ARGUMENT);
+    }
     snakegrid_result_free(result);
     result = NULL;
 
