@@ -771,8 +771,8 @@ fn repair_notes(regions: &[Region], problems: &[Option<&Problem>]) -> Vec<String
             .map(|(kind, count)| format!("{count} where {kind}"))
             .collect();
         notes.push(format!(
-            "{} more invalid polygons repaired (features {}{more}): {}; the JSON report \
-             (regions[].repair) names each region's problem",
+            "{} more invalid polygons repaired (features {}{more}): {}; each region's problem \
+             comes with its cell (the JSON report's regions[].repair)",
             rest.len(),
             named.join(", "),
             counts.join(", ")
@@ -1769,8 +1769,8 @@ mod tests {
         assert_eq!(
             notes[10],
             "5 more invalid polygons repaired (features r11, r12, r13, r14, r15): 4 where a ring \
-             intersects itself, 1 where a hole lies outside its polygon's shell; the JSON report \
-             (regions[].repair) names each region's problem"
+             intersects itself, 1 where a hole lies outside its polygon's shell; each region's \
+             problem comes with its cell (the JSON report's regions[].repair)"
         );
         // Eleven are all listed: a summary of one would be no shorter.
         let notes = repair_notes(&regions[..12], &problems[..12]);
