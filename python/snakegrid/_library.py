@@ -96,10 +96,11 @@ class Library:
             getattr(self.c, f"snakegrid_{kind}_free")(handle)
 
     def text(self, accessor, *arguments):
-        """A string owned by a handle, decoded."""
+        """A string owned by a handle, decoded; None where the library gives NULL (a region's
+        repair, for a valid polygon)."""
         out = ctypes.c_char_p()
         self.check(accessor(*arguments, ctypes.byref(out)))
-        return out.value.decode("utf-8", "replace")
+        return None if out.value is None else out.value.decode("utf-8", "replace")
 
     def bytes(self, accessor, *arguments):
         """A WKB buffer owned by a result, copied out."""

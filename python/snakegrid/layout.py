@@ -216,7 +216,7 @@ def _read(lib, result, as_shapely):
                                         as_shapely),
             fields=values,
             metrics=_copy(RegionMetrics, metrics),
-            repair=_repair(lib, result, i)))
+            repair=lib.text(c.snakegrid_result_region_repair, result, i)))
     notes_count = ctypes.c_size_t()
     lib.check(c.snakegrid_result_note_count(result, ctypes.byref(notes_count)))
     return GridMap(
@@ -228,13 +228,6 @@ def _read(lib, result, as_shapely):
         notes=[lib.text(c.snakegrid_result_note, result, i) for i in range(notes_count.value)],
         hexjson=_hexjson(lib, result),
         group_metrics=_group_metrics(lib, result))
-
-
-def _repair(lib, result, index):
-    """What was wrong with region `index`'s polygon if it was repaired, else None."""
-    out = ctypes.c_char_p()
-    lib.check(lib.c.snakegrid_result_region_repair(result, index, ctypes.byref(out)))
-    return None if out.value is None else out.value.decode("utf-8", "replace")
 
 
 def _group_metrics(lib, result):

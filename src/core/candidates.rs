@@ -744,9 +744,10 @@ fn repair_notes(regions: &[Region], problems: &[Option<&Problem>]) -> Vec<String
         .filter_map(|(region, problem)| Some((region.id.as_str(), (*problem)?)))
         .collect();
     // One more is listed rather than summed up alone.
-    let listed = match repaired.len() <= REPAIRS_LISTED + 1 {
-        true => repaired.len(),
-        false => REPAIRS_LISTED,
+    let listed = if repaired.len() <= REPAIRS_LISTED + 1 {
+        repaired.len()
+    } else {
+        REPAIRS_LISTED
     };
     let mut notes: Vec<String> = (repaired[..listed].iter())
         .map(|(id, problem)| format!("feature {id}: invalid polygon repaired ({problem})"))
