@@ -644,6 +644,44 @@ fn overwrite_never_replaces_a_file_that_holds_other_layers() {
     assert_eq!(std::fs::read(&gpkg).unwrap(), before);
 }
 
+#[test]
+fn overwrite_through_a_symbolic_link_replaces_the_file_it_leads_to_and_keeps_the_link() {
+    let scratch = Scratch::new("linked-destination");
+    let (_, src) = source(&scratch);
+    let folder = scratch.path("versions");
+    std::fs::create_dir_all(&folder).unwrap();
+    let target = folder.join("grid-v1.gpkg");
+    std::fs::write(&target, b"old").unwrap();
+    let link = scratch.path("grid.gpkg");
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    let report = scratch.path("report.json");
+    let report_target = folder.join("report-v1.json");
+    std::fs::write(&report_target, b"old").unwrap();
+    std::os::unix::fs::symlink(&report_target, &report).unwrap();
+    assert_success(&snakegrid([
+        "-q",
+        "-overwrite",
+        "-id",
+        "id",
+        "-json",
+        p(&report),
+        p(&link),
+        p(&src),
+    ]));
+    // The links are links still, to the same files, which now hold the run's outputs (as
+    // ogr2ogr writes through a link).
+    for (link, target) in [(&link, &target), (&report, &report_target)] {
+        let metadata = std::fs::symlink_metadata(link).unwrap();
+        assert!(metadata.file_type().is_symlink(), "{link:?} was replaced");
+        assert_eq!(&std::fs::read_link(link).unwrap(), target);
+    }
+    let written = Dataset::open(&target).unwrap();
+    assert_eq!(written.layer(0).unwrap().feature_count(), 49);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&report_target).unwrap()).unwrap();
+    assert_eq!(json["regions"].as_array().unwrap().len(), 49);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Interruptions.
 

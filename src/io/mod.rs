@@ -132,7 +132,15 @@ fn run_in(
     let format = driver.short_name();
     // An output at /vsistdout/ is made in a temporary folder, and sent once the run succeeds.
     let asked = job;
-    let (redirected, stream) = stdout::redirect(job, &driver)?;
+    let (mut redirected, stream) = stdout::redirect(job, &driver)?;
+    redirected.dst = paths::through_link(&redirected.dst);
+    for path in [
+        &mut redirected.json_report,
+        &mut redirected.svg,
+        &mut redirected.hexjson,
+    ] {
+        *path = path.as_deref().map(paths::through_link);
+    }
     let job = &redirected;
     let dataset = read::open(session, &job.src)?;
     let source_files = SourceFiles::of(&dataset, &job.src);

@@ -100,6 +100,18 @@ pub(crate) fn canonical(path: &Path) -> Vec<PathBuf> {
     ways
 }
 
+/// The file an output path names: through a symbolic link to an existing file, the file it
+/// leads to, so that the output replaces that file and the link stays (as `ogr2ogr` writes
+/// through a link); otherwise the path itself. The run's outputs are staged beside their final
+/// path and renamed over it, and a rename over a link replaces the link.
+pub(crate) fn through_link(path: &str) -> String {
+    let is_link = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink());
+    match Path::new(path).canonicalize() {
+        Ok(real) if is_link && real.is_file() => real.to_string_lossy().into_owned(),
+        _ => path.to_string(),
+    }
+}
+
 /// `path` with `.` and `..` resolved by spelling only, for paths the file system cannot resolve.
 fn lexical(path: &Path) -> PathBuf {
     let mut out = PathBuf::new();
