@@ -199,6 +199,7 @@ fn generate_here(
         progress(prepared_share * fraction, message)
     })?;
     let grouped = regions.iter().any(|r| r.group.is_some());
+    notes.extend(params.unused(grouped));
     let blocks = blocks_of(regions, &order, &prepared, grouped);
     let gap = grouped && params.group_gap > 0;
     let tiling = Tiling::of(params);

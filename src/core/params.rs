@@ -1093,6 +1093,26 @@ impl Params {
         budget.clamp(1, layouts.max(1))
     }
 
+    /// Notes on the settings this run leaves unused (`grouped`: some region has a group), so
+    /// that a setting asked for and silently ignored does not pass for one applied.
+    pub fn unused(&self, grouped: bool) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.cell == CellShape::Square && self.hex_orientation != HexOrientation::Pointy {
+            notes.push(
+                "hex_orientation is flat but the cells are squares (cell square): it applies to \
+                 hexagons only"
+                    .to_string(),
+            );
+        }
+        if self.group_gap > 0 && !grouped {
+            notes.push(format!(
+                "group_gap is {} but no region has a group: it applies to grouped layouts only",
+                self.group_gap
+            ));
+        }
+        notes
+    }
+
     /// Checks every value against its range in [`PARAMETERS`]; the message names the parameter.
     pub fn validate(&self) -> Result<(), String> {
         for parameter in PARAMETERS {
@@ -1266,5 +1286,20 @@ mod tests {
         assert_eq!(range("seed"), "[0, 2^64 - 1]");
         assert_eq!(range("shifts"), "1 to 16 x:y pairs, each in [0, 1)");
         assert_eq!(range("load_model"), "nodal or element");
+    }
+
+    #[test]
+    fn settings_a_run_leaves_unused_are_named() {
+        let mut params = Params::default();
+        assert!(params.unused(false).is_empty());
+        params.set("hex_orientation", "flat").unwrap();
+        params.set("group_gap", "1").unwrap();
+        let notes = params.unused(false);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(notes[0].starts_with("hex_orientation is flat but the cells are squares"));
+        assert!(notes[1].starts_with("group_gap is 1 but no region has a group"));
+        // Both apply once the cells are hexagons and the regions have groups.
+        params.set("cell", "hex").unwrap();
+        assert!(params.unused(true).is_empty());
     }
 }

@@ -251,7 +251,7 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
         job.dst,
         outcome.layer,
         outcome.format,
-        round_to(map.cell_size, 1),
+        in_map_units(map.cell_size),
     );
     let cells = map.cell_layout();
     if let (Some(orientation), Some(offset)) = (cells.orientation, cells.offset) {
@@ -270,7 +270,7 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
         m.location,
         m.location_p90,
         m.location_max,
-        round_to(m.location_raw, 1),
+        in_map_units(m.location_raw),
         m.location_moved,
         m.shape
     );
@@ -326,6 +326,19 @@ pub fn summary(job: &Job, outcome: &Outcome) -> String {
     text
 }
 
+/// A length in map units: to a tenth for the usual metres or feet, to four significant digits
+/// below 100, so that a layer in small units (degrees scaled down, kilometres of a small
+/// island) does not read as a cell size of 0.
+fn in_map_units(value: f64) -> String {
+    let magnitude = value.abs();
+    let decimals = if magnitude >= 100.0 || magnitude == 0.0 || !magnitude.is_finite() {
+        1
+    } else {
+        (3 - magnitude.log10().floor() as i32).clamp(1, 17) as usize
+    };
+    round_to(value, decimals)
+}
+
 /// `value` with at most `decimals` decimals, without trailing zeros.
 fn round_to(value: f64, decimals: usize) -> String {
     let text = format!("{value:.decimals$}");
@@ -333,5 +346,19 @@ fn round_to(value: f64, decimals: usize) -> String {
         text.trim_end_matches('0').trim_end_matches('.').to_owned()
     } else {
         text
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lengths_in_small_map_units_keep_four_significant_digits() {
+        assert_eq!(in_map_units(398_317.94), "398317.9");
+        assert_eq!(in_map_units(150.0), "150");
+        assert_eq!(in_map_units(12.3456), "12.35");
+        assert_eq!(in_map_units(0.000_398_317_9), "0.0003983");
+        assert_eq!(in_map_units(0.0), "0");
     }
 }
