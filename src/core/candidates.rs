@@ -1562,6 +1562,11 @@ impl Context<'_> {
                 nearer_another: &nearer_another,
             }),
             lakes,
+            // Pins bend the layout to the user's cells, and a region may have to sit far from
+            // its place for them: the rule fights the pins (held in every search, with the
+            // NYT's five pins, seeds 0-5: adjacency 0.886 → 0.874; BENCHMARKS.md "Left alone
+            // far from home").
+            keep_company: self.pins.is_empty(),
         };
         refine::refine(&layout, cells, self.params, seed, &|done| {
             report(Stage::Refining, done)

@@ -927,10 +927,13 @@ pub static PARAMETERS: &[Parameter] = &[
         group: Group::Refinement,
         advanced: true,
         summary: "Refinement: far from home beyond",
-        help: "Beyond F, the farther of this distance and where it started, a region's distance \
-             d from its place costs refine_w_far·(d − F)² more: the linear cost beyond \
-             refine_location_knee lets a region with few neighbours be sent far to make room \
-             for others (world_countries: Kuwait beside Russia).",
+        help: "Beyond F, the farther of this distance and where it started, a region keeps at \
+             least one of its neighbours beside it, and its distance d from its place costs \
+             refine_w_far·(d − F)² more. The linear cost beyond refine_location_knee lets a \
+             region with few neighbours be sent far to make room for others (us_states: \
+             Washington DC beside Arkansas; world_countries: Kuwait beside Russia): a layout \
+             that leaves one alone there is refined again refusing such moves (with thousands \
+             of regions, from the start; not with pins). 1000 turns this off.",
         access: accessors!(refine_location_far, Real),
     },
     Parameter {
