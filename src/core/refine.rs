@@ -49,8 +49,8 @@ pub struct Layout<'a> {
     /// The area of the regions' own holes (lakes), in cells: the layout's holes up to it are the
     /// source's, not defects (method.md §8), as the candidates' ranking counts them.
     pub lakes: u32,
-    /// Whether a layout that leaves a region stranded ([`Problem::stranded`]) is searched
-    /// again refusing such moves (see [`refine`]).
+    /// Whether the refinement keeps any region from being left stranded
+    /// ([`Problem::stranded`]; how, see [`refine`]). Off with pins.
     pub keep_company: bool,
 }
 
@@ -110,8 +110,8 @@ pub fn refine(
     // freely first and, only if that strands a region, again from the same start refusing every
     // move that strands one: its other layouts stay as they were. A striped layout (thousands of
     // regions) strands some in every search (the US counties: 17 to 23), so it keeps the rule
-    // from the start instead of searching twice. Each search has half the refinement's share of
-    // the progress bar.
+    // from the start instead of searching twice. Each of a small layout's searches has half of
+    // the refinement's share of the progress bar.
     let best = if stripes == 1 {
         let half = |share: f64| tick(share / 2.0);
         let free = anneal(&problem, cells, params, seed, false, &half)?.0;
@@ -1518,7 +1518,7 @@ mod tests {
 
     #[test]
     fn a_region_is_stranded_far_from_home_without_a_neighbour_beside_it() {
-        // A row of three regions, 0 - 1 - 2, in the top row of a 4 × 3 block.
+        // A 4 × 3 block of regions, each on the cell under its centroid, rook neighbours.
         let map = Map::new(4, 3, 0);
         let layout = map.layout();
         let params = Params {
