@@ -1100,7 +1100,7 @@ impl Params {
     /// that a setting asked for and silently ignored does not pass for one applied.
     pub fn unused(&self, grouped: bool) -> Vec<String> {
         let mut notes = Vec::new();
-        if self.cell == CellShape::Square && self.hex_orientation != HexOrientation::Pointy {
+        if self.cell == CellShape::Square && self.hex_orientation == HexOrientation::Flat {
             notes.push(
                 "hex_orientation is flat but the cells are squares (cell square): it applies to \
                  hexagons only"
