@@ -1723,26 +1723,49 @@ fn kml_keeps_every_field_beside_its_own_name_and_description() {
         p(&src),
     ]));
     assert_success(&snakegrid(["-q", "-id", "id", p(&gpkg), p(&src)]));
-    // Only the fields asked for: KML's own (a null timestamp) do not read as text.
-    let cells = |path: &Path| -> BTreeMap<String, (i32, i32)> {
-        let dataset = Dataset::open(path).unwrap();
-        let mut layer = dataset.layer(0).unwrap();
-        let index = |name: &str| layer.defn().field_index(name).unwrap();
-        let (id, col, row) = (index("id"), index("grid_col"), index("grid_row"));
-        layer
-            .features()
-            .map(|f| {
-                let int = |k| f.field_as_integer(k).unwrap().unwrap();
-                (
-                    f.field_as_string(id).unwrap().unwrap(),
-                    (int(col), int(row)),
-                )
-            })
-            .collect()
-    };
-    let in_kml = cells(&kml);
+    let in_kml = cells_by_id(&kml);
     assert_eq!(in_kml.len(), 49);
-    assert_eq!(in_kml, cells(&gpkg));
+    assert_eq!(in_kml, cells_by_id(&gpkg));
+}
+
+/// Each cell's column and row by its region's `id`, read from the fields asked for only (KML's
+/// own, such as a null timestamp, do not read as text).
+fn cells_by_id(path: &Path) -> BTreeMap<String, (i32, i32)> {
+    let dataset = Dataset::open(path).unwrap();
+    let mut layer = dataset.layer(0).unwrap();
+    let index = |name: &str| layer.defn().field_index(name).unwrap();
+    let (id, col, row) = (index("id"), index("grid_col"), index("grid_row"));
+    layer
+        .features()
+        .map(|f| {
+            let int = |k| f.field_as_integer(k).unwrap().unwrap();
+            (
+                f.field_as_string(id).unwrap().unwrap(),
+                (int(col), int(row)),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_format_gdal_cannot_write_in_memory_is_tried_on_disk() {
+    // GDAL's netCDF driver claims virtual I/O but cannot create a vector dataset in /vsimem/,
+    // where the output's trial runs first: it failed with "Unable to create netCDF file
+    // grid.nc (tried in memory)", as if the destination's folder were missing.
+    let scratch = Scratch::new("netcdf");
+    let src = scratch.input("us_states");
+    let (nc, gpkg) = (scratch.path("grid.nc"), scratch.path("grid.gpkg"));
+    let output = snakegrid(["-q", "-id", "id", p(&nc), p(&src)]);
+    assert_success(&output);
+    assert_success(&snakegrid(["-q", "-id", "id", p(&gpkg), p(&src)]));
+    let in_netcdf = cells_by_id(&nc);
+    assert_eq!(in_netcdf.len(), 49);
+    assert_eq!(in_netcdf, cells_by_id(&gpkg));
+    let leftovers: Vec<_> = (std::fs::read_dir(scratch.path("")).unwrap())
+        .map(|entry| entry.unwrap().file_name())
+        .filter(|name| name.to_string_lossy().contains("snakegrid"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
 #[test]

@@ -5,7 +5,8 @@
 //! - [`read`]: open the source, pick the layer, `-where`, features → regions;
 //! - [`crs`]: the working CRS (`-s_srs`, `-t_srs`, the automatic equal-area projection);
 //! - [`options`]: creation options, the user's (`-dsco`, `-lco`) and snakegrid's own;
-//! - [`probe`]: what the output driver makes of the layer, tried in memory before the run;
+//! - [`probe`]: what the output driver makes of the layer, tried in memory before the run (on
+//!   disk for a driver that cannot write in memory);
 //! - [`destination`]: what may happen to what is already at an output (`-update`, `-overwrite`);
 //! - [`write`]: the grid layer with the source attributes, cell and metric fields, metadata;
 //! - [`readback`]: an output read back to prove it holds what it claims;

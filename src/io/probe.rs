@@ -1,6 +1,6 @@
 //! What the output driver makes of the grid layer, found out before the run reads a feature: the
-//! layer is written once in memory (`/vsimem/`) by the same driver with the same options and
-//! fields, and read back. Whatever the format, this tells
+//! layer is written once in memory (`/vsimem/`; in a temporary folder for a driver that cannot
+//! write there) by the same driver with the same options and fields, and read back. Whatever the format, this tells
 //! - whether it keeps the cells at all (XLSX and ODS store no geometry; CSV stores it as WKT,
 //!   which snakegrid asks for), and whether the creation options are acceptable;
 //! - the names the driver gives the fields (a DBF cuts them to 10 characters, SQLite launders
@@ -227,8 +227,40 @@ impl Trial<'_> {
     /// back (the ids too when `id_position` is given), and returns the names the driver gave
     /// every field, whether it can add and delete layers in the file it wrote, and how many
     /// files it wrote.
+    ///
+    /// A driver that fails in memory is tried again in a temporary folder on disk, and that
+    /// trial's answer stands: some drivers claim GDAL's virtual I/O but cannot create a vector
+    /// dataset there (netCDF: "Unable to create netCDF file", as if the destination's folder
+    /// were missing), and what they do on disk is what the real output will meet.
     fn try_layer(
         &self,
+        fields: &[OutputField],
+        features: &[(&str, &Feature)],
+        id_position: Option<usize>,
+    ) -> Result<(Vec<String>, bool, usize), Error> {
+        let memory = MemFolder::new();
+        let result = self.try_layer_at(&memory.0, "in memory", fields, features, id_position);
+        if result.is_ok() {
+            return result;
+        }
+        match tempfile::tempdir() {
+            Ok(disk) => self.try_layer_at(
+                disk.path(),
+                "in a temporary folder",
+                fields,
+                features,
+                id_position,
+            ),
+            Err(_) => result,
+        }
+    }
+
+    /// [`Self::try_layer`] in `folder`, whose path the messages replace by the destination's
+    /// file name and say where (`place`) it was tried.
+    fn try_layer_at(
+        &self,
+        folder: &Path,
+        place: &str,
         fields: &[OutputField],
         features: &[(&str, &Feature)],
         id_position: Option<usize>,
@@ -236,12 +268,11 @@ impl Trial<'_> {
         // GDAL's warnings about the trial (unknown options, values cut) come again, about the
         // real output, when the run writes it.
         let warnings = self.session.warning_count();
-        let folder = MemFolder::new();
-        let result = self.try_layer_in(&folder, fields, features, id_position);
+        let result = self.try_layer_in(folder, fields, features, id_position);
         self.session.forget_warnings_after(warnings);
-        // Messages name the destination, not the in-memory file that stood in for it.
-        let shown = folder.0.join(self.file_name).display().to_string();
-        let tried = format!("{} (tried in memory)", self.file_name.to_string_lossy());
+        // Messages name the destination, not the file that stood in for it.
+        let shown = folder.join(self.file_name).display().to_string();
+        let tried = format!("{} (tried {place})", self.file_name.to_string_lossy());
         result.map_err(|error| match error {
             Error::Io(message) => Error::Io(message.replace(&shown, &tried)),
             Error::InvalidInput { feature, message } => Error::InvalidInput {
@@ -254,12 +285,12 @@ impl Trial<'_> {
 
     fn try_layer_in(
         &self,
-        folder: &MemFolder,
+        folder: &Path,
         fields: &[OutputField],
         features: &[(&str, &Feature)],
         id_position: Option<usize>,
     ) -> Result<(Vec<String>, bool, usize), Error> {
-        let path = folder.0.join(self.file_name);
+        let path = folder.join(self.file_name);
         let square: Polygon<f64> =
             polygon![(x: 0.0, y: 0.0), (x: 1.0, y: 0.0), (x: 1.0, y: 1.0), (x: 0.0, y: 1.0)];
         let rows: Vec<Row> = features
