@@ -1728,6 +1728,40 @@ fn kml_keeps_every_field_beside_its_own_name_and_description() {
     assert_eq!(in_kml, cells_by_id(&gpkg));
 }
 
+#[test]
+fn overwriting_a_geopackage_of_one_layer_keeps_the_run_in_its_metadata() {
+    // A layer written in place beside others keeps its metrics in its description only (GDAL
+    // would rewrite the others' metadata); with no other layer in the file, it was still left
+    // without its parameters and metrics, and the note blamed other layers.
+    let scratch = Scratch::new("overwrite-metadata");
+    let src = scratch.input("us_states");
+    let dst = scratch.path("grid.gpkg");
+    assert_success(&snakegrid(["-q", "-id", "id", p(&dst), p(&src)]));
+    let output = snakegrid(["-id", "id", "-seed", "3", "-overwrite", p(&dst), p(&src)]);
+    assert_success(&output);
+    assert!(
+        !stdout(&output).contains("metadata tables"),
+        "{}",
+        stdout(&output)
+    );
+    let written = Dataset::open(&dst).unwrap();
+    use gdal::Metadata;
+    let parameters = (written.layer(0).unwrap())
+        .metadata_item("SNAKEGRID_PARAMETERS", "")
+        .expect("the run's parameters");
+    assert!(parameters.contains("\"seed\":3"), "{parameters}");
+    let mut count = written
+        .execute_sql(
+            "SELECT COUNT(*) FROM gpkg_metadata",
+            None,
+            gdal::vector::sql::Dialect::DEFAULT,
+        )
+        .unwrap()
+        .expect("a result set");
+    let rows = count.features().next().unwrap().field_as_integer(0);
+    assert_eq!(rows.unwrap(), Some(1), "the first run's metadata is gone");
+}
+
 /// Each cell's column and row by its region's `id`, read from the fields asked for only (KML's
 /// own, such as a null timestamp, do not read as text).
 fn cells_by_id(path: &Path) -> BTreeMap<String, (i32, i32)> {

@@ -47,7 +47,12 @@ pub(crate) enum Plan {
     /// A new dataset, which replaces whatever [`Destination::displaced`] lists.
     New,
     /// A copy of the existing file with the layer added, or put in place of the layer named.
-    InPlace { replace: Option<String> },
+    /// `alone`: the file holds no other layer and no raster, so nothing else's metadata can
+    /// change with the new layer's.
+    InPlace {
+        replace: Option<String>,
+        alone: bool,
+    },
 }
 
 /// An output path checked before any work.
@@ -139,9 +144,11 @@ impl Destination {
                      replace it, or -nln to choose another name)"
                 )));
             }
+            let alone = layers.iter().all(|l| Some(l) == same) && !has_rasters(&old);
             return Ok(Destination {
                 plan: Plan::InPlace {
                     replace: same.cloned(),
+                    alone,
                 },
                 displaced: vec![path.clone()],
                 path,
@@ -160,10 +167,7 @@ impl Destination {
                 )
             }));
         }
-        let rasters = old.raster_count() > 0
-            || old
-                .metadata_domain("SUBDATASETS")
-                .is_some_and(|items| !items.is_empty());
+        let rasters = has_rasters(&old);
         // What replacing the whole file would lose: a file of the output's own single-layer
         // format holds just the layer being replaced; any other, every layer of another name.
         let others: Vec<&String> = if format == output && layers.len() <= 1 {
@@ -307,4 +311,12 @@ fn own_files(path: &Path, listed: &[String]) -> Vec<PathBuf> {
         // Spelled as the destination is, so that the two compare.
         .map(|name| path.with_file_name(name))
         .collect()
+}
+
+/// Whether `dataset` holds rasters, itself or as subdatasets (a GeoPackage's tile tables).
+fn has_rasters(dataset: &Dataset) -> bool {
+    dataset.raster_count() > 0
+        || dataset
+            .metadata_domain("SUBDATASETS")
+            .is_some_and(|items| !items.is_empty())
 }

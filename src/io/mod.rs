@@ -377,15 +377,15 @@ impl StagedGrid<'_> {
         let format = self.driver.short_name();
         let mut notes = Vec::new();
         // Layer metadata set in an existing GeoPackage makes GDAL rewrite the metadata of
-        // every other layer (their timestamps change), so a layer added in place keeps its
-        // metrics in its description only.
+        // every other layer (their timestamps change), so a layer added beside others keeps
+        // its metrics in its description only.
         let metadata = match destination.plan {
-            Plan::New => {
+            Plan::New | Plan::InPlace { alone: true, .. } => {
                 let id_field =
                     (self.ids).map(|(position, _)| self.fields.stored[position].as_str());
                 report::metadata(job, self.source_layer, id_field, params, map)
             }
-            Plan::InPlace { .. } => {
+            Plan::InPlace { alone: false, .. } => {
                 notes.push(format!(
                     "the run's parameters and metrics are not written to the metadata tables of \
                      the existing {:?}, which would change the other layers' metadata: the \
@@ -409,7 +409,7 @@ impl StagedGrid<'_> {
                 driver: self.driver,
                 options: &job.dataset_options,
             },
-            Plan::InPlace { replace } => {
+            Plan::InPlace { replace, .. } => {
                 std::fs::copy(&destination.path, &staged_path).map_err(|e| {
                     Error::Io(format!(
                         "cannot copy the destination {:?} to update it: {e}",
