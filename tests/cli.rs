@@ -735,6 +735,55 @@ fn two_runs_give_byte_identical_outputs() {
 }
 
 #[test]
+fn formats_that_store_the_time_or_random_ids_give_byte_identical_outputs() {
+    // netCDF's history attribute held the time of writing and the staging file's path; a File
+    // Geodatabase's tables hold a GUID per item, random unless GDAL is told otherwise.
+    let scratch = Scratch::new("identical-formats");
+    let src = scratch.input("us_states");
+    let quick = ["-refine", "false", "-noise_levels", "", "-shifts", "0:0"];
+    for name in ["grid.nc", "grid.gdb"] {
+        let bytes = |run: &str| -> BTreeMap<String, Vec<u8>> {
+            let dir = scratch.path(&format!("{run}-{name}"));
+            std::fs::create_dir(&dir).unwrap();
+            let dst = dir.join(name);
+            let mut args = vec!["-q", "-id", "id"];
+            args.extend(quick);
+            args.extend([p(&dst), p(&src)]);
+            assert_success(&snakegrid(args));
+            let files = if dst.is_dir() {
+                (std::fs::read_dir(&dst).unwrap())
+                    .map(|entry| entry.unwrap().path())
+                    .collect()
+            } else {
+                vec![dst]
+            };
+            (files.into_iter())
+                .map(|f| {
+                    (
+                        f.file_name().unwrap().to_string_lossy().into_owned(),
+                        std::fs::read(&f).unwrap(),
+                    )
+                })
+                .collect()
+        };
+        let first = bytes("a");
+        // A second later, so that a time of writing would differ.
+        std::thread::sleep(std::time::Duration::from_millis(1100));
+        let second = bytes("b");
+        assert_eq!(
+            first.keys().collect::<Vec<_>>(),
+            second.keys().collect::<Vec<_>>()
+        );
+        for (file, content) in &first {
+            assert!(
+                content == &second[file],
+                "{name}: {file} differs between two runs"
+            );
+        }
+    }
+}
+
+#[test]
 fn one_worker_or_four_give_byte_identical_outputs() {
     // Above the sparse assignment's limit and with fewer layouts than workers would take in
     // parallel; fewer refinement moves keep the test short.

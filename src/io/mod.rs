@@ -174,10 +174,11 @@ fn run_in(
         options::layer_options(&driver, &job.layer_options, &taken, description)
     };
     let trial_options = layer_options("snakegrid grid map");
+    let dataset_options = options::dataset_options(&driver, &job.dataset_options);
     let trial = probe::Trial {
         session,
         driver: &driver,
-        dataset_options: &job.dataset_options,
+        dataset_options: &dataset_options,
         layer_options: &trial_options,
         layer: &layer_name,
         file_name,
@@ -263,6 +264,7 @@ fn run_in(
         source_layer: &source_layer,
         srs: plan.working.as_ref(),
         fields: &fields,
+        dataset_options: &dataset_options,
         layer_options: &layer_options,
         ids: id_position.map(|position| (position, ids.as_slice())),
         write_share: shares.write,
@@ -354,6 +356,8 @@ struct StagedGrid<'a> {
     srs: Option<&'a SpatialRef>,
     /// The fields as the probe found the driver names them.
     fields: &'a probe::Fields,
+    /// The dataset creation options of a new dataset ([`options::dataset_options`]).
+    dataset_options: &'a [String],
     /// The layer creation options, given the layer's description.
     layer_options: &'a dyn Fn(&str) -> Vec<String>,
     /// The id field's position among the fields, and every region's id in input order.
@@ -407,7 +411,7 @@ impl StagedGrid<'_> {
         let container = match &destination.plan {
             Plan::New => Container::New {
                 driver: self.driver,
-                options: &job.dataset_options,
+                options: self.dataset_options,
             },
             Plan::InPlace { replace, .. } => {
                 std::fs::copy(&destination.path, &staged_path).map_err(|e| {

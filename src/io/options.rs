@@ -20,9 +20,19 @@ struct DriverOption {
     values: Vec<String>,
 }
 
-/// Option `name` of the driver's layer creation option list (`DS_LAYER_CREATIONOPTIONLIST`).
+/// The driver's layer creation options (`layer_option`).
+const LAYER_OPTIONS: &str = "DS_LAYER_CREATIONOPTIONLIST";
+/// The driver's dataset creation options.
+const DATASET_OPTIONS: &str = "DMD_CREATIONOPTIONLIST";
+
+/// Option `name` of the driver's layer creation option list.
 fn layer_option(driver: &Driver, name: &str) -> Option<DriverOption> {
-    let xml = driver.metadata_item("DS_LAYER_CREATIONOPTIONLIST", "")?;
+    driver_option(driver, LAYER_OPTIONS, name)
+}
+
+/// Option `name` of the driver's option list `list` ([`LAYER_OPTIONS`], [`DATASET_OPTIONS`]).
+fn driver_option(driver: &Driver, list: &str, name: &str) -> Option<DriverOption> {
+    let xml = driver.metadata_item(list, "")?;
     let document = roxmltree::Document::parse(&xml).ok()?;
     let option = document.descendants().find(|node| {
         node.has_tag_name("Option")
@@ -88,6 +98,21 @@ pub(crate) fn layer_options(
     options
 }
 
+/// The dataset creation options of a new output: the user's `-dsco` first, then those snakegrid
+/// sets where the driver has them and the user did not set them:
+/// - `WRITE_GDAL_HISTORY=NO` (netCDF): the history attribute holds the time of writing and the
+///   staging file's path, so that no two runs would write the same file.
+pub(crate) fn dataset_options(driver: &Driver, user: &[String]) -> Vec<String> {
+    let mut options = user.to_vec();
+    let set = |name: &str| (options.iter()).any(|o| name_of(o).eq_ignore_ascii_case(name));
+    if !set("WRITE_GDAL_HISTORY")
+        && driver_option(driver, DATASET_OPTIONS, "WRITE_GDAL_HISTORY").is_some()
+    {
+        options.push("WRITE_GDAL_HISTORY=NO".to_owned());
+    }
+    options
+}
+
 /// `OPTION=name` for a column the driver creates itself (FID, geometry) when its default name
 /// would clash with a field; `None` (keep the driver's default) when there is no clash.
 fn column_option(driver: &Driver, option: &str, taken: &[&str]) -> Option<String> {
@@ -128,5 +153,15 @@ mod tests {
         assert_eq!(layer_options(&csv, &[], &[], "m"), ["GEOMETRY=AS_WKT"]);
         let user = ["GEOMETRY=AS_XY".to_owned()];
         assert_eq!(layer_options(&csv, &user, &[], "m"), user);
+    }
+
+    #[test]
+    fn new_datasets_write_no_history_unless_asked() {
+        let netcdf = DriverManager::get_driver_by_name("netCDF").unwrap();
+        assert_eq!(dataset_options(&netcdf, &[]), ["WRITE_GDAL_HISTORY=NO"]);
+        let user = ["write_gdal_history=YES".to_owned()];
+        assert_eq!(dataset_options(&netcdf, &user), user);
+        let gpkg = DriverManager::get_driver_by_name("GPKG").unwrap();
+        assert!(dataset_options(&gpkg, &[]).is_empty());
     }
 }

@@ -3,7 +3,8 @@
 //! - GDAL's messages are caught instead of printed: errors become our one-line [`Error`]s,
 //!   warnings become notes of the run;
 //! - formats that store "now" (GeoPackage's `last_change` and metadata timestamps) store a fixed
-//!   date, so two runs give the same bytes;
+//!   date, and a File Geodatabase's GUIDs are made from its contents, so two runs give the same
+//!   bytes;
 //! - the SQLite-based formats (GeoPackage, SQLite) do not sync to the disk at each commit of
 //!   their journal (28 times for one GeoPackage layer): every run writes into a staged copy
 //!   that is nobody's until it is synced once and moved into place (`commit`), so those syncs
@@ -22,9 +23,12 @@ use std::marker::PhantomData;
 pub(crate) const FIXED_DATE: &str = "2000-01-01T00:00:00Z";
 
 /// The configuration options a session sets on its thread, with their values.
-const OPTIONS: [(&str, &str); 2] = [
+const OPTIONS: [(&str, &str); 3] = [
     ("OGR_CURRENT_DATE", FIXED_DATE),
     ("OGR_SQLITE_SYNCHRONOUS", "OFF"),
+    // A File Geodatabase's tables hold a random GUID per item (the layer, the dataset):
+    // without this no two runs write the same folder.
+    ("OPENFILEGDB_REPRODUCIBLE_UUID", "YES"),
 ];
 
 /// What GDAL said on this thread since the session started.
