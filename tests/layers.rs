@@ -613,3 +613,39 @@ fn counties_simplified_one_by_one_leave_no_holes_in_the_layout() {
     assert!(map.metrics.source_holes > 10.0, "{:?}", map.metrics);
     assert_eq!(map.metrics.holes, 0, "{:?}", map.metrics);
 }
+
+#[test]
+fn a_speck_of_an_island_leaves_no_ring_too_small_to_draw_in_the_moved_outline() {
+    // A 10 m islet 20 km off North Carolina: the Snake's outline holds it as a ring of two
+    // nodes, which the moved outline (the C API's, Python's and QGIS's output) wrote as a
+    // polygon that shapely and GEOS refuse to read.
+    let mut regions = load("nc_counties");
+    let bounds = (regions.iter())
+        .filter_map(|r| geo::BoundingRect::bounding_rect(&r.geometry))
+        .reduce(|a, b| {
+            geo::Rect::new(
+                geo::coord! { x: a.min().x.min(b.min().x), y: a.min().y.min(b.min().y) },
+                geo::coord! { x: a.max().x.max(b.max().x), y: a.max().y.max(b.max().y) },
+            )
+        })
+        .unwrap();
+    let (x, y) = (bounds.min().x - 20_000.0, bounds.min().y);
+    regions.last_mut().unwrap().geometry =
+        MultiPolygon(vec![
+            geo::Rect::new((x, y), (x + 10.0, y + 10.0)).to_polygon()
+        ]);
+    let map = run(&regions, &Params::default());
+    assert_eq!(map.cells.len(), regions.len());
+    assert!(!map.moved_outline.0.is_empty());
+    for polygon in &map.moved_outline {
+        for ring in std::iter::once(polygon.exterior()).chain(polygon.interiors()) {
+            let area = geo::Polygon::new(ring.clone(), vec![]).unsigned_area();
+            assert!(ring.0.len() >= 4 && area > 0.0, "a ring of {:?}", ring.0);
+        }
+    }
+    assert!(
+        map.moved_outline.is_valid(),
+        "{:?}",
+        map.moved_outline.validation_errors()
+    );
+}

@@ -1697,7 +1697,7 @@ impl Context<'_> {
             }),
             snake: run.report.clone(),
             candidates,
-            moved_outline: f.polygons_to_map(&best.moved_outline),
+            moved_outline: f.polygons_to_map(&outline::drawable(&best.moved_outline)),
             adjacency,
             notes,
         }

@@ -329,7 +329,8 @@ pub struct GridMap {
     pub snake: SnakeReport,
     /// All candidates, best first; the first is the chosen layout.
     pub candidates: Vec<CandidateReport>,
-    /// The chosen candidate's moved outline, map units.
+    /// The chosen candidate's moved outline, map units, without rings too small to draw (an
+    /// islet far below a cell, which the Snake's network holds as a point).
     pub moved_outline: MultiPolygon<f64>,
     /// Adjacent region pairs, as indices into the input order (i < j).
     pub adjacency: Vec<(usize, usize)>,

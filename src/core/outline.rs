@@ -1517,6 +1517,23 @@ pub fn polygons_of(rings: &[Ring]) -> MultiPolygon<f64> {
     MultiPolygon(polygons.collect())
 }
 
+/// `outline` without the rings too small to draw: a part whose ring the network holds as one or
+/// two nodes (an islet far below a cell, simplified to a point) and the holes so shrunk. The
+/// method keeps such a part, so that the parts keep their indices; an output polygon whose ring
+/// encloses no area is one GEOS and shapely refuse to read.
+pub fn drawable(outline: &MultiPolygon<f64>) -> MultiPolygon<f64> {
+    let encloses = |ring: &LineString<f64>| {
+        ring.0.len() >= 4 && Polygon::new(ring.clone(), Vec::new()).unsigned_area() > 0.0
+    };
+    let polygons = (outline.0.iter())
+        .filter(|p| encloses(p.exterior()))
+        .map(|p| {
+            let holes = p.interiors().iter().filter(|h| encloses(h)).cloned();
+            Polygon::new(p.exterior().clone(), holes.collect())
+        });
+    MultiPolygon(polygons.collect())
+}
+
 /// Moves a centroid that is outside the simplified outline to `INSIDE_MARGIN` inside it, past
 /// the nearest point of the outline (§1).
 fn move_inside(c: Coord<f64>, index: &RingIndex) -> Coord<f64> {
