@@ -274,14 +274,36 @@ def edit_pins(cells, cell_ids, q, r, *, keep=None, labels=None, library=None, **
     `pins` with the source regions. Two cells on one position raise SnakegridError naming both.
     """
     lib = library or _library.load()
+    cells = list(cells)
     count = len(cells)
+    names = [f"index {k}" for k in range(count)] if labels is None else list(labels)
+    positions = [
+        [_grid_position(v, field, name)
+         for v, name in zip(_per_region(values, cells, f"{field} values", field), names)]
+        for values, field in ((q, "grid_q"), (r, "grid_r"))]
     as_array = (ctypes.c_int32 * count)
     with lib.handle("regions") as cell_handle, lib.handle("options") as handle:
         _add_features(lib, cell_handle, cells, cell_ids, labels)
         set_options(lib, handle, options)
         out = (_abi.EditPin * count)()
-        keep_array = None if keep is None else (ctypes.c_bool * count)(*(bool(k) for k in keep))
+        keep_array = None if keep is None else (ctypes.c_bool * count)(
+            *(bool(k) for k in _per_region(keep, cells, "keep values", "keep value")))
         lib.check(lib.c.snakegrid_edit_pins(
-            cell_handle, as_array(*(int(v) for v in q)), as_array(*(int(v) for v in r)),
-            keep_array, count, handle, out))
+            cell_handle, as_array(*positions[0]), as_array(*positions[1]), keep_array, count,
+            handle, out))
     return [(p.col, p.row, p.moved) if p.pinned else None for p in out]
+
+
+def _grid_position(value, field, label):
+    """A cell's grid_q or grid_r as written, as a whole number the C API takes (32 bits), else
+    ValueError naming the cell."""
+    if value is None:
+        raise ValueError(f"{label}: {field} is empty: every cell of the grid layer needs its "
+                         "position")
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{label}: {field} {value!r} is not a number") from None
+    if not number.is_integer() or not -2**31 <= number < 2**31:
+        raise ValueError(f"{label}: {field} {value!r} is not a whole number of at most 31 bits")
+    return int(number)

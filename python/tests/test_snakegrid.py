@@ -121,6 +121,29 @@ def test_a_relayout_keeps_the_moved_and_kept_cells(us_states):
     assert len(set(cells_again.values())) == len(ids)
 
 
+def test_edit_pins_refuses_positions_it_cannot_read(us_states):
+    grid = snakegrid.layout(us_states.geometry, us_states["abbr"])
+    cells = [c.geometry for c in grid.cells]
+    ids = [c.id for c in grid.cells]
+    q = [c.fields["grid_q"] for c in grid.cells]
+    r = [c.fields["grid_r"] for c in grid.cells]
+    # Too few values were filled with zeros (nearly every cell "moved"), a short keep list with
+    # False, and a NULL, NaN or a 2**40 failed in int() or wrapped without naming the cell.
+    with pytest.raises(ValueError, match="49 geometries and 48 grid_q values"):
+        snakegrid.edit_pins(cells, ids, q[:-1], r)
+    with pytest.raises(ValueError, match="49 geometries and 3 keep values"):
+        snakegrid.edit_pins(cells, ids, q, r, keep=[True] * 3)
+    labels = [f"FID {k}" for k in range(len(cells))]
+    for bad, message in ((None, "FID 2: grid_r is empty"),
+                         (float("nan"), "FID 2: grid_r nan is not a whole number"),
+                         (2**40, "FID 2: grid_r 1099511627776 is not a whole number"),
+                         ("x", "FID 2: grid_r 'x' is not a number")):
+        edited = list(r)
+        edited[2] = bad
+        with pytest.raises(ValueError, match=message):
+            snakegrid.edit_pins(cells, ids, q, edited, labels=labels)
+
+
 def test_options_are_the_command_line_parameters():
     help_text = subprocess.run([CLI, "--help"], check=True, capture_output=True,
                                text=True).stdout

@@ -257,6 +257,52 @@ def test_a_relayout_keeps_moved_and_ticked_cells(us_run):
         run("relayout", INPUT=US_STATES, ID_FIELD="id", EDITED=onto, OUTPUT="memory:")
 
 
+def _edited_attributes(grid, values):
+    """A copy of grid layer `grid` with `values` ({field: {id: value}}) set, a text field keep
+    added."""
+    edited = grid.materialize(QgsFeatureRequest())
+    edited.startEditing()
+    edited.addAttribute(QgsField("keep", QVariant.String))
+    edited.updateFields()
+    for feature in edited.getFeatures():
+        for field, by_id in values.items():
+            if feature["id"] in by_id:
+                edited.changeAttributeValue(feature.id(), edited.fields().lookupField(field),
+                                            by_id[feature["id"]])
+    edited.commitChanges()
+    return edited
+
+
+def test_a_relayout_reads_text_keep_values_and_names_a_cell_without_its_position(us_run):
+    grid = us_run["OUTPUT"]
+    # A text keep field: "false" and "0" were kept (bool("false") is True in Python).
+    texts = {"keep": {"39": "yes", "48": "false", "23": "0", "06": " FALSE "}}
+    log = Log()
+    run("relayout", INPUT=US_STATES, ID_FIELD="id", EDITED=_edited_attributes(grid, texts),
+        KEEP_FIELD="keep", OUTPUT="memory:", feedback=log)
+    assert any("0 moved cells and 1 kept regions pinned" in line for line in log.lines)
+    unclear = _edited_attributes(grid, {"keep": {"39": "maybe"}})
+    with pytest.raises(QgsProcessingException, match="the keep value 'maybe' is neither"):
+        run("relayout", INPUT=US_STATES, ID_FIELD="id", EDITED=unclear, KEEP_FIELD="keep",
+            OUTPUT="memory:")
+    # A NULL grid_q failed with a Python traceback (int() of None).
+    blank = _edited_attributes(grid, {"grid_q": {"39": None}})
+    with pytest.raises(QgsProcessingException, match="FID [0-9]+: grid_q is empty"):
+        run("relayout", INPUT=US_STATES, ID_FIELD="id", EDITED=blank, OUTPUT="memory:")
+
+
+def test_a_field_the_layer_lacks_is_refused_by_name(qgis_app):
+    # qgis_process and processing.run take any text for a field: a typo laid the map out by
+    # feature ids, or without groups or pins, and said nothing.
+    for field in ("ID_FIELD", "GROUP_FIELD"):
+        with pytest.raises(QgsProcessingException,
+                           match=r"the layer has no field 'nope' \(its fields: .*id, name, abbr"):
+            run("gridmap", INPUT=US_STATES, OUTPUT="memory:", **{field: "nope"})
+    with pytest.raises(QgsProcessingException, match="no field 'nope'"):
+        run("gridmap", INPUT=US_STATES, OUTPUT="memory:", PIN_COL_FIELD="nope",
+            PIN_ROW_FIELD="id")
+
+
 def test_parameters_are_the_library_table_in_upper_case(qgis_app):
     import snakegrid
 

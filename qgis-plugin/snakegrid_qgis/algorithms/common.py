@@ -134,6 +134,40 @@ def _number(value, label):
                                      "number") from None
 
 
+def field_index(fields, name):
+    """The index of field `name` (-1 when none is given), or a clear error: a name typed into
+    qgis_process or processing.run is not checked against the layer, and a field taken as
+    missing laid the map out by feature ids, without groups or pins."""
+    if not name:
+        return -1
+    index = fields.lookupField(name)
+    if index < 0:
+        raise QgsProcessingException(
+            f"the layer has no field {name!r} (its fields: {', '.join(fields.names())})")
+    return index
+
+
+def ticked(value, label):
+    """A keep attribute as true or false: NULL, 0, blank and false/no/off are false, a non-zero
+    number and true/yes/on are true (as text too: a text field of "false" is not kept), anything
+    else a clear error naming the feature."""
+    value = _id(value)
+    if value is None or isinstance(value, bool):
+        return bool(value)
+    if isinstance(value, (int, float)):
+        return value != 0
+    text = str(value).strip().lower()
+    if text in ("", "false", "f", "no", "n", "off"):
+        return False
+    if text in ("true", "t", "yes", "y", "on"):
+        return True
+    try:
+        return float(text) != 0
+    except ValueError:
+        raise QgsProcessingException(f"feature {label}: the keep value {value!r} is neither "
+                                     "true nor false") from None
+
+
 class Features:
     """The features of a source as the library takes them: ids (the id field's values, else the
     feature ids, as on the command line), labels naming them ("FID 3") and their geometries.
@@ -144,12 +178,12 @@ class Features:
                  pin_fields=None):
         self.crs = source.sourceCrs()
         self.fields = source.fields()
-        id_index = self.fields.lookupField(id_field) if id_field else -1
-        group_index = self.fields.lookupField(group_field) if group_field else -1
+        id_index = field_index(self.fields, id_field)
+        group_index = field_index(self.fields, group_field)
         self.features, self.ids, self.labels, self.geometries = [], [], [], []
         #: Each feature's group (None: NULL), or None without a group field.
         self.groups = [] if group_index >= 0 else None
-        pin_indices = [self.fields.lookupField(f) for f in pin_fields or ()]
+        pin_indices = [field_index(self.fields, f) for f in pin_fields or ()]
         #: Each feature's pin, (column, row) with None for NULL, or None without pin fields.
         self.pins = [] if len(pin_indices) == 2 and min(pin_indices) >= 0 else None
         total = max(source.featureCount(), 1)

@@ -319,15 +319,19 @@ class RelayoutAlgorithm(GridMapAlgorithm):
                 "Grid map (snake model) wrote, with the source's id field")
         cells = common.Features(edited, id_field, feedback, 10.0)
         at = {name: fields.lookupField(name) for name in ("grid_q", "grid_r")}
-        keep_index = fields.lookupField(keep_field) if keep_field else -1
-        q = [f.attribute(at["grid_q"]) for f in cells.features]
-        r = [f.attribute(at["grid_r"]) for f in cells.features]
-        keep = [keep_index >= 0 and bool(common._id(f.attribute(keep_index)))
-                for f in cells.features]
+        keep_index = common.field_index(fields, keep_field)
+        q = [common._id(f.attribute(at["grid_q"])) for f in cells.features]
+        r = [common._id(f.attribute(at["grid_r"])) for f in cells.features]
+        keep = [keep_index >= 0 and common.ticked(f.attribute(keep_index), label)
+                for f, label in zip(cells.features, cells.labels)]
         options = parameters.values(self, self.options, parameters_, context)
         crs = edited.sourceCrs()
-        pins = sg.edit_pins(cells.wkb(crs, context), cells.ids, q, r, keep=keep,
-                            labels=cells.labels, **options)
+        try:
+            pins = sg.edit_pins(cells.wkb(crs, context), cells.ids, q, r, keep=keep,
+                                labels=cells.labels, **options)
+        except ValueError as e:
+            # A cell whose grid_q or grid_r is NULL or not a whole number, named.
+            raise QgsProcessingException(str(e)) from e
         by_id = {sg.id_text(i): pin for i, pin in zip(cells.ids, pins)}
         moved = sum(1 for pin in pins if pin and pin[2])
         kept = sum(1 for pin in pins if pin and not pin[2])
