@@ -8,6 +8,7 @@ adds (snakegrid_field_info), so names, types and values are the command line's.
 import ctypes
 import dataclasses
 import math
+import threading
 from dataclasses import dataclass
 from typing import Any, Dict, List, Optional
 
@@ -148,8 +149,13 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
     """
     lib = library or _library.load()
     callback_error = []
+    interrupted = threading.Event()
 
     def report(fraction, message, _user_data):
+        if interrupted.is_set():
+            return 1
+        if progress is None:
+            return 0
         try:
             go_on = progress(fraction, message.decode("utf-8", "replace"))
         except BaseException as e:  # never let an exception unwind into the library
@@ -157,8 +163,9 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
             return 1
         return 1 if go_on is False else 0
 
-    # The ctypes callback must outlive the run: it is kept in this frame.
-    c_progress = _abi.PROGRESS(report) if progress else _abi.PROGRESS()
+    # The ctypes callback must outlive the run: it is kept in this frame. It is always given,
+    # so that Ctrl-C can cancel the run through it (see _interruptible).
+    c_progress = _abi.PROGRESS(report)
     with lib.handle("regions") as regions, lib.handle("options") as handle:
         geometries = _add_features(lib, regions, geometries, ids, labels)
         if groups is not None:
@@ -173,15 +180,64 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
                 lib.check(lib.c.snakegrid_regions_set_pin(regions, k, col, row))
         set_options(lib, handle, options)
         result = ctypes.c_void_p()
-        status = lib.c.snakegrid_run(regions, handle, c_progress, None, ctypes.byref(result))
+
+        def run():
+            status = lib.c.snakegrid_run(regions, handle, c_progress, None, ctypes.byref(result))
+            # Read on the thread of the call: the library keeps its message per thread.
+            try:
+                lib.check(status)
+            except _library.SnakegridError as e:
+                return e
+            return None
+
+        failure = _interruptible(run, interrupted)
         try:
             if callback_error:
                 raise callback_error[0]
-            lib.check(status)
+            if failure is not None:
+                raise failure
             as_shapely = bool(geometries) and not _geometry.is_wkb(geometries[0])
             return _read(lib, result, as_shapely)
         finally:
             lib.c.snakegrid_result_free(result)
+
+
+def _interruptible(call, interrupted):
+    """Runs `call`, a run of the library whose progress callback cancels it once `interrupted`
+    is set, so that Ctrl-C stops it, and returns what `call` returns. Python raises KeyboardInterrupt only in the main thread and
+    only between bytecodes: during the library's call the interrupt waited for the whole run,
+    and when it fell inside a progress callback, ctypes swallowed it. So from the main thread
+    the call runs on a worker thread while this one waits, interruptibly; on Ctrl-C the
+    callback cancels the run (the library stops within 0.2 s), and KeyboardInterrupt is raised
+    once the worker is done with the handles it uses."""
+    if threading.current_thread() is not threading.main_thread():
+        return call()
+    outcome = []
+
+    def work():
+        try:
+            outcome.append((call(), None))
+        except BaseException as e:  # handed to the waiting thread
+            outcome.append((None, e))
+
+    worker = threading.Thread(target=work, name="snakegrid run", daemon=True)
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.05)
+    except KeyboardInterrupt:
+        interrupted.set()
+        # The handles stay alive until the run has returned, whatever else is pressed.
+        while worker.is_alive():
+            try:
+                worker.join()
+            except KeyboardInterrupt:
+                pass
+        raise
+    status, error = outcome[0]
+    if error is not None:
+        raise error
+    return status
 
 
 def _per_region(values, geometries, name, one):

@@ -5,8 +5,10 @@ import csv
 import json
 import os
 import re
+import signal
 import subprocess
 import sys
+import threading
 
 import pyogrio
 import pytest
@@ -142,6 +144,28 @@ def test_edit_pins_refuses_positions_it_cannot_read(us_states):
         edited[2] = bad
         with pytest.raises(ValueError, match=message):
             snakegrid.edit_pins(cells, ids, q, edited, labels=labels)
+
+
+@pytest.mark.parametrize("with_progress", [False, True])
+def test_ctrl_c_cancels_a_run(us_states, with_progress):
+    # Without a progress callback the interrupt waited for the whole run; with one it fell
+    # inside the callback, where ctypes swallowed it, and the run went on to the end. This run
+    # would take minutes (the parameter table's most refinement moves).
+    seen = []
+    timer = threading.Timer(1.0, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            snakegrid.layout(us_states.geometry, us_states["abbr"],
+                             progress=(lambda done, _: seen.append(done)) if with_progress
+                             else None,
+                             refine_moves_per_region=1000000)
+    finally:
+        timer.cancel()
+    if with_progress:
+        assert seen and max(seen) < 1.0, "the run went on to the end"
+    again = snakegrid.layout(us_states.geometry, us_states["abbr"], refine=False)
+    assert len(again.cells) == len(us_states)
 
 
 def test_options_are_the_command_line_parameters():
