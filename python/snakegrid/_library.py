@@ -40,6 +40,15 @@ class Cancelled(SnakegridError):
     """The progress callback asked to stop; the run produced nothing."""
 
 
+def c_text(text, what):
+    """`text` as the library takes a string (UTF-8, ending at its first NUL), else ValueError
+    naming `what`: a NUL inside would cut it short without a word (ids "a\\0x" and "a\\0y"
+    both read as "a")."""
+    if "\0" in text:
+        raise ValueError(f"{what} {text!r} holds a NUL character, which the library cannot take")
+    return text.encode()
+
+
 def library_path():
     """Where the library is looked for: $SNAKEGRID_LIBRARY, else beside this file."""
     return os.environ.get("SNAKEGRID_LIBRARY") or os.path.join(

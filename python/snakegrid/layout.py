@@ -125,7 +125,8 @@ def _add_features(lib, handle, geometries, ids, labels):
         wkb = _geometry.to_wkb(geometry)
         region_id = id_text(region_id)
         lib.check(lib.c.snakegrid_regions_add_feature(
-            handle, str(label).encode(), None if region_id is None else region_id.encode(),
+            handle, _library.c_text(str(label), "the label"),
+            None if region_id is None else _library.c_text(region_id, f"{label}: the id"),
             wkb, 0 if wkb is None else len(wkb)))
     return geometries
 
@@ -135,7 +136,8 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
     """Lays out regions as a grid map: one cell per region (squares, or hexagons with cell="hex").
 
     `geometries`: shapely polygons or multipolygons, or their WKB, in a planar CRS (project a
-    lon/lat layer first, e.g. to working_crs(...)). `ids`: one unique id per region (default
+    lon/lat layer first, e.g. to working_crs(...); a GeoSeries in a geographic CRS is laid out
+    as given, with a note saying so). `ids`: one unique id per region (default
     the positions). `groups`: one group per region (any values, compared as id_text() gives
     them; None: a group of its own), whose regions keep together in one block of cells per
     landmass; option group_gap=1 keeps the blocks a cell apart. `pins`: per region None (free)
@@ -148,6 +150,7 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
     message, which names the region or option.
     """
     lib = library or _library.load()
+    crs = getattr(geometries, "crs", None)  # a GeoSeries' CRS
     callback_error = []
     interrupted = threading.Event()
 
@@ -172,7 +175,8 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
             for k, group in enumerate(_per_region(groups, geometries, "groups", "group")):
                 name = id_text(group)
                 lib.check(lib.c.snakegrid_regions_set_group(
-                    regions, k, None if name is None else name.encode()))
+                    regions, k,
+                    None if name is None else _library.c_text(name, f"index {k}: the group")))
         if pins is not None:
             for k, pin in enumerate(_per_region(pins, geometries, "pins", "pin (or None)")):
                 col, row = (math.nan, math.nan) if pin is None else (
@@ -197,7 +201,14 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
             if failure is not None:
                 raise failure
             as_shapely = bool(geometries) and not _geometry.is_wkb(geometries[0])
-            return _read(lib, result, as_shapely)
+            grid = _read(lib, result, as_shapely)
+            if getattr(crs, "is_geographic", False):
+                grid.notes.append(
+                    f"the geometries' CRS {crs.to_string()} is geographic: they were laid out "
+                    "as if degrees were planar units (east-west stretched away from the "
+                    "equator); project them first, e.g. to snakegrid.working_crs(...), as the "
+                    "command line does")
+            return grid
         finally:
             lib.c.snakegrid_result_free(result)
 

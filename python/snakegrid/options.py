@@ -99,7 +99,9 @@ def option_text(value):
 def set_options(lib, handle, values):
     """Sets {name: value} on an options handle; the library refuses what it cannot take."""
     for name, value in values.items():
-        lib.check(lib.c.snakegrid_options_set(handle, name.encode(), option_text(value).encode()))
+        lib.check(lib.c.snakegrid_options_set(
+            handle, _library.c_text(name, "the option name"),
+            _library.c_text(option_text(value), f"option {name}: the value")))
 
 
 def check_options(library=None, **values):

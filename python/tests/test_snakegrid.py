@@ -168,6 +168,24 @@ def test_ctrl_c_cancels_a_run(us_states, with_progress):
     assert len(again.cells) == len(us_states)
 
 
+def test_text_with_a_nul_character_is_refused_by_name(us_states):
+    # ctypes cut it at the NUL: ids "a", NUL, "x" and "a", NUL, "y" both read as "a", an option
+    # name "alpha", NUL, "x" as alpha.
+    geometries = list(us_states.geometry[:2])
+    with pytest.raises(ValueError, match="index 0: the id 'a\\\\x00x' holds a NUL"):
+        snakegrid.layout(geometries, ["a\0x", "a\0y"])
+    with pytest.raises(ValueError, match="the option name 'alpha\\\\x00x' holds a NUL"):
+        snakegrid.layout(geometries, ["a", "b"], **{"alpha\0x": 2})
+
+
+def test_a_geoseries_in_degrees_gets_a_note(us_states):
+    lonlat = us_states.geometry.to_crs("EPSG:4326")
+    grid = snakegrid.layout(lonlat, us_states["abbr"], refine=False)
+    assert any("EPSG:4326 is geographic" in note for note in grid.notes), grid.notes
+    planar = snakegrid.layout(us_states.geometry, us_states["abbr"], refine=False)
+    assert not any("geographic" in note for note in planar.notes), planar.notes
+
+
 def test_options_are_the_command_line_parameters():
     help_text = subprocess.run([CLI, "--help"], check=True, capture_output=True,
                                text=True).stdout
