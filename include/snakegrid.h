@@ -821,7 +821,9 @@ snakegrid_status snakegrid_job_set_overwrite(struct snakegrid_job *job,
  *
  * Thread safety: not concurrently with any other use of the same handle.
  */
-snakegrid_status snakegrid_job_set_update(struct snakegrid_job *job, bool update);
+SNAKEGRID_MUST_USE
+snakegrid_status snakegrid_job_set_update(struct snakegrid_job *job,
+                                          bool update);
 
 /**
  * Makes a grid map of the regions in memory with the given options and writes a new result

@@ -229,6 +229,29 @@ fn the_committed_header_is_the_generated_one() {
 }
 
 #[test]
+fn every_function_that_can_fail_warns_when_its_status_is_dropped() {
+    // The header promises SNAKEGRID_MUST_USE on every function returning a status;
+    // snakegrid_job_set_update lacked it.
+    let header = std::fs::read_to_string(root().join("include/snakegrid.h")).unwrap();
+    let lines: Vec<&str> = header.lines().collect();
+    let mut checked = 0;
+    for (k, line) in lines.iter().enumerate() {
+        let Some(rest) = line.strip_prefix("snakegrid_status snakegrid_") else {
+            continue;
+        };
+        let name = rest.split('(').next().unwrap();
+        let marked = line.contains("SNAKEGRID_MUST_USE")
+            || (k > 0 && lines[k - 1].trim() == "SNAKEGRID_MUST_USE");
+        assert!(marked, "snakegrid_{name} lacks SNAKEGRID_MUST_USE");
+        checked += 1;
+    }
+    assert!(
+        checked > 40,
+        "only {checked} functions returning a status found"
+    );
+}
+
+#[test]
 fn the_header_version_macros_match_cargo_toml() {
     let manifest = std::fs::read_to_string(root().join("Cargo.toml")).unwrap();
     let version = manifest

@@ -170,6 +170,7 @@ pub unsafe extern "C" fn snakegrid_job_set_overwrite(
 /// job is made.
 ///
 /// Thread safety: not concurrently with any other use of the same handle.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn snakegrid_job_set_update(job: *mut DatasetJob, update: bool) -> Status {
     guard("snakegrid_job_set_update", || {

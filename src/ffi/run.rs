@@ -216,4 +216,36 @@ mod tests {
             snakegrid_options_free(options);
         }
     }
+
+    /// A job without its source or destination says which is missing: it said "cannot open
+    /// source \"\"".
+    #[cfg(feature = "gdal")]
+    #[test]
+    fn a_job_without_its_datasets_names_the_missing_one() {
+        let (mut job, mut options, mut result) = (null_mut(), null_mut(), null_mut());
+        // SAFETY: fresh out-pointers, strings NUL-terminated, handles freed at the end.
+        unsafe {
+            assert_eq!(snakegrid_job_new(&mut job), Status::OK);
+            assert_eq!(snakegrid_options_new(&mut options), Status::OK);
+            for (set, missing) in [
+                (None, "no source dataset"),
+                (Some(c"src"), "no destination"),
+            ] {
+                if let Some(key) = set {
+                    let value = c"/no/such/source.gpkg";
+                    assert_eq!(
+                        snakegrid_job_set(job, key.as_ptr(), value.as_ptr()),
+                        Status::OK
+                    );
+                }
+                let status = snakegrid_run_job(job, options, None, null_mut(), &mut result);
+                let message = CStr::from_ptr(snakegrid_last_error_message()).to_string_lossy();
+                assert_eq!(status, Status::INVALID_OPTION, "{message}");
+                assert!(message.contains(missing), "{message}");
+                assert!(result.is_null());
+            }
+            snakegrid_job_free(job);
+            snakegrid_options_free(options);
+        }
+    }
 }

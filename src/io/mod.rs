@@ -118,6 +118,17 @@ fn run_in(
         }
     };
     // Everything that can be refused without reading a feature is refused before any work.
+    for (path, what, name) in [
+        (&job.src, "source", "SRC"),
+        (&job.dst, "destination", "DST"),
+    ] {
+        if path.is_empty() {
+            return Err(Error::InvalidParameter(format!(
+                "no {what} dataset is given ({name}; \"{}\" of a C API job)",
+                name.to_ascii_lowercase()
+            )));
+        }
+    }
     for (flag, list) in [
         ("-dsco", &job.dataset_options),
         ("-lco", &job.layer_options),
