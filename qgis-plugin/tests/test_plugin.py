@@ -291,6 +291,20 @@ def test_a_relayout_reads_text_keep_values_and_names_a_cell_without_its_position
         run("relayout", INPUT=US_STATES, ID_FIELD="id", EDITED=blank, OUTPUT="memory:")
 
 
+def test_an_empty_selection_is_named(us_states_lonlat):
+    # In longitude and latitude it failed seeking a working CRS: "no coordinates to centre a
+    # projection on".
+    layer = QgsVectorLayer(us_states_lonlat, "states", "ogr")
+    layer.removeSelection()
+    QgsProject.instance().addMapLayer(layer)
+    try:
+        source = QgsProcessingFeatureSourceDefinition(layer.id(), selectedFeaturesOnly=True)
+        with pytest.raises(QgsProcessingException, match="none is selected"):
+            run("gridmap", INPUT=source, ID_FIELD="id", OUTPUT="memory:")
+    finally:
+        QgsProject.instance().removeMapLayer(layer.id())
+
+
 def test_a_field_the_layer_lacks_is_refused_by_name(qgis_app):
     # qgis_process and processing.run take any text for a field: a typo laid the map out by
     # feature ids, or without groups or pins, and said nothing.

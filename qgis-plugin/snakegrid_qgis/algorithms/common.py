@@ -206,6 +206,12 @@ class Features:
             geometry = feature.geometry()
             self.geometries.append(None if geometry.isNull() else geometry)
             feedback.setProgress(progress_to * (n + 1) / total)
+        if not self.features:
+            # Said before the working CRS is sought, whose message ("no coordinates to centre
+            # a projection on") would not say why.
+            raise QgsProcessingException(
+                "the layer gives no features: it is empty, or 'Selected features only' is on "
+                "and none is selected")
 
     def drawn(self):
         """Each region as drawn, for the working-CRS rule: polygons as WKB (the library reads
