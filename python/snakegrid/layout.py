@@ -194,8 +194,8 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
                 return e
             return None
 
-        failure = _interruptible(run, interrupted)
         try:
+            failure = _interruptible(run, interrupted)
             if callback_error:
                 raise callback_error[0]
             if failure is not None:
@@ -215,12 +215,12 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
 
 def _interruptible(call, interrupted):
     """Runs `call`, a run of the library whose progress callback cancels it once `interrupted`
-    is set, so that Ctrl-C stops it, and returns what `call` returns. Python raises KeyboardInterrupt only in the main thread and
-    only between bytecodes: during the library's call the interrupt waited for the whole run,
-    and when it fell inside a progress callback, ctypes swallowed it. So from the main thread
-    the call runs on a worker thread while this one waits, interruptibly; on Ctrl-C the
-    callback cancels the run (the library stops within 0.2 s), and KeyboardInterrupt is raised
-    once the worker is done with the handles it uses."""
+    is set, and returns what `call` returns, so that Ctrl-C stops the run. Python raises
+    KeyboardInterrupt only in the main thread and only between bytecodes: during the library's
+    call the interrupt waited for the whole run, and when it fell inside a progress callback,
+    ctypes swallowed it. So from the main thread the call runs on a worker thread while this
+    one waits, interruptibly; on Ctrl-C the callback cancels the run (the library stops within
+    0.2 s), and KeyboardInterrupt is raised once the worker is done with the handles it uses."""
     if threading.current_thread() is not threading.main_thread():
         return call()
     outcome = []
@@ -372,5 +372,6 @@ def _grid_position(value, field, label):
     except (TypeError, ValueError):
         raise ValueError(f"{label}: {field} {value!r} is not a number") from None
     if not number.is_integer() or not -2**31 <= number < 2**31:
-        raise ValueError(f"{label}: {field} {value!r} is not a whole number of at most 31 bits")
+        raise ValueError(f"{label}: {field} {value!r} is not a whole number from -2**31 to "
+                         "2**31 - 1")
     return int(number)

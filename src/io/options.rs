@@ -20,9 +20,9 @@ struct DriverOption {
     values: Vec<String>,
 }
 
-/// The driver's layer creation options (`layer_option`).
+/// The metadata item in which a driver lists its layer creation options.
 const LAYER_OPTIONS: &str = "DS_LAYER_CREATIONOPTIONLIST";
-/// The driver's dataset creation options.
+/// The metadata item in which a driver lists its dataset creation options.
 const DATASET_OPTIONS: &str = "DMD_CREATIONOPTIONLIST";
 
 /// Option `name` of the driver's layer creation option list.

@@ -1,6 +1,7 @@
 //! What the output driver makes of the grid layer, found out before the run reads a feature: the
 //! layer is written once in memory (`/vsimem/`; in a temporary folder for a driver that cannot
-//! write there) by the same driver with the same options and fields, and read back. Whatever the format, this tells
+//! write there) by the same driver with the same options and fields, and read back. Whatever
+//! the format, this tells
 //! - whether it keeps the cells at all (XLSX and ODS store no geometry; CSV stores it as WKT,
 //!   which snakegrid asks for), and whether the creation options are acceptable;
 //! - the names the driver gives the fields (a DBF cuts them to 10 characters, SQLite launders
