@@ -97,12 +97,20 @@ def test_pins_give_the_command_line_cells(us_states, tmp_path):
         snakegrid.layout(frame.geometry, frame["id"], pins=[(0.5, 1)] + [None] * (len(frame) - 1))
 
 
-def test_a_relayout_keeps_the_moved_and_kept_cells(us_states):
-    grid = snakegrid.layout(us_states.geometry, us_states["abbr"])
-    cells = [c.geometry for c in grid.cells]
-    ids = [c.id for c in grid.cells]
-    q = [c.fields["grid_q"] for c in grid.cells]
-    r = [c.fields["grid_r"] for c in grid.cells]
+@pytest.fixture(scope="module")
+def us_grid(us_states):
+    return snakegrid.layout(us_states.geometry, us_states["abbr"])
+
+
+def columns(grid):
+    """The cells, ids, grid_q and grid_r of `grid`, as lists to edit."""
+    return ([c.geometry for c in grid.cells], [c.id for c in grid.cells],
+            [c.fields["grid_q"] for c in grid.cells], [c.fields["grid_r"] for c in grid.cells])
+
+
+def test_a_relayout_keeps_the_moved_and_kept_cells(us_states, us_grid):
+    grid = us_grid
+    cells, ids, q, r = columns(grid)
     # By hand: Texas three cells down, Maine two right; Ohio ticked to keep.
     moves = {"TX": (0, -3), "ME": (2, 0)}
     for k, region in enumerate(ids):
@@ -123,12 +131,8 @@ def test_a_relayout_keeps_the_moved_and_kept_cells(us_states):
     assert len(set(cells_again.values())) == len(ids)
 
 
-def test_edit_pins_refuses_positions_it_cannot_read(us_states):
-    grid = snakegrid.layout(us_states.geometry, us_states["abbr"])
-    cells = [c.geometry for c in grid.cells]
-    ids = [c.id for c in grid.cells]
-    q = [c.fields["grid_q"] for c in grid.cells]
-    r = [c.fields["grid_r"] for c in grid.cells]
+def test_edit_pins_refuses_positions_it_cannot_read(us_grid):
+    cells, ids, q, r = columns(us_grid)
     # Too few values were filled with zeros (nearly every cell "moved"), a short keep list with
     # False, and a NULL, NaN or a 2**40 failed in int() or wrapped without naming the cell.
     with pytest.raises(ValueError, match="49 geometries and 48 grid_q values"):
