@@ -12,13 +12,16 @@ use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
-/// Make a grid map (tile map): one equal square cell per region, placed so that cells stay near
-/// their regions, neighbours stay neighbours, directions hold and the whole keeps the map's
-/// outline (the snake model of Wei, Yang, Xu and Ding, 2024, with an adjacency-aware refinement).
+/// Make a grid map (tile map): one equal cell per region (squares, or hexagons with -cell hex),
+/// placed so that cells stay near their regions, neighbours stay neighbours, directions hold and
+/// the whole keeps the map's outline (the snake model of Wei, Yang, Xu and Ding, 2024, with an
+/// adjacency-aware refinement).
 ///
 /// The output layer has every source field, then grid_col and grid_row (the cell, from the top
-/// left), cell_disp (distance from the region to its cell, in cells), nbr_kept (share of the
-/// region's neighbours kept) and orient_err (mean direction error to its neighbours, degrees).
+/// left), grid_q and grid_r (axial coordinates, for hexagons), cell_disp (distance from the
+/// region to its cell, in cells), nbr_kept (share of the region's neighbours kept), orient_err
+/// (mean direction error to its neighbours, degrees) and grid_group (the cell's block: its
+/// group on its landmass with -group, else its landmass).
 #[derive(Parser, Debug)]
 #[command(name = "snakegrid", color = ColorChoice::Never, max_term_width = 100)]
 struct Cli {
