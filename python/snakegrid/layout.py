@@ -113,7 +113,10 @@ def id_text(value):
 
 def _add_features(lib, handle, geometries, ids, labels):
     """Adds every feature with the command line's checks; `labels` name them in messages until
-    their ids are known (default "index k")."""
+    their ids are known (default "index k"). A GeoDataFrame stands for its geometry column
+    (listed, a frame gives its column names)."""
+    if hasattr(geometries, "columns") and hasattr(geometries, "geometry"):
+        geometries = geometries.geometry
     geometries = list(geometries)
     ids = [str(k) for k in range(len(geometries))] if ids is None else list(ids)
     labels = [f"index {k}" for k in range(len(geometries))] if labels is None else list(labels)
@@ -135,7 +138,8 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
            library=None, **options):
     """Lays out regions as a grid map: one cell per region (squares, or hexagons with cell="hex").
 
-    `geometries`: shapely polygons or multipolygons, or their WKB, in a planar CRS (project a
+    `geometries`: shapely polygons or multipolygons, or their WKB (a GeoSeries, or a
+    GeoDataFrame for its geometry column), in a planar CRS (project a
     lon/lat layer first, e.g. to working_crs(...); a GeoSeries in a geographic CRS is laid out
     as given, with a note saying so). `ids`: one unique id per region (default
     the positions). `groups`: one group per region (any values, compared as id_text() gives
@@ -179,8 +183,7 @@ def layout(geometries, ids=None, *, labels=None, groups=None, pins=None, progres
                     None if name is None else _library.c_text(name, f"index {k}: the group")))
         if pins is not None:
             for k, pin in enumerate(_per_region(pins, geometries, "pins", "pin (or None)")):
-                col, row = (math.nan, math.nan) if pin is None else (
-                    math.nan if v is None else float(v) for v in pin)
+                col, row = _pin(pin, k)
                 lib.check(lib.c.snakegrid_regions_set_pin(regions, k, col, row))
         set_options(lib, handle, options)
         result = ctypes.c_void_p()
@@ -249,6 +252,19 @@ def _interruptible(call, interrupted):
     if error is not None:
         raise error
     return status
+
+
+def _pin(pin, k):
+    """Region `k`'s pin as the library takes it: (column, row), NaN for a free one or a free
+    axis (None), else ValueError naming the region; the library checks the numbers."""
+    if pin is None:
+        return math.nan, math.nan
+    try:
+        col, row = pin
+        return tuple(math.nan if v is None else float(v) for v in (col, row))
+    except (TypeError, ValueError):
+        raise ValueError(f"index {k}: the pin {pin!r} is not None or a (column, row) pair of "
+                         "numbers") from None
 
 
 def _per_region(values, geometries, name, one):

@@ -81,6 +81,8 @@ def option_text(value):
     sequences of numbers or of (x, y) pairs as the comma-separated lists options take."""
     if value is None:
         return "none"
+    if hasattr(value, "tolist"):  # a numpy array or scalar: its Python values
+        value = value.tolist()
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, str):

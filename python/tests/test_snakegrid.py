@@ -182,6 +182,24 @@ def test_text_with_a_nul_character_is_refused_by_name(us_states):
         snakegrid.layout(geometries, ["a", "b"], **{"alpha\0x": 2})
 
 
+def test_a_geodataframe_numpy_options_and_bad_pins_are_taken_as_meant(us_states):
+    # A whole GeoDataFrame was read as its column names ("expected a shapely geometry, got
+    # str"), a numpy array of shifts as its repr, and a pin of three numbers failed with
+    # "too many values to unpack".
+    import numpy
+
+    framed = snakegrid.layout(us_states, us_states["abbr"], refine=False,
+                              shifts=numpy.array([[0.0, 0.0]]))
+    plain = snakegrid.layout(us_states.geometry, us_states["abbr"], refine=False,
+                             shifts=[(0.0, 0.0)])
+    assert python_cells(framed) == python_cells(plain)
+    pins = [None] * len(us_states)
+    for bad in ((0, 0, 0), ("a", "b"), 5):
+        pins[3] = bad
+        with pytest.raises(ValueError, match="index 3: the pin .* is not None or a"):
+            snakegrid.layout(us_states.geometry, us_states["abbr"], pins=pins)
+
+
 def test_a_geoseries_in_degrees_gets_a_note(us_states):
     lonlat = us_states.geometry.to_crs("EPSG:4326")
     grid = snakegrid.layout(lonlat, us_states["abbr"], refine=False)
