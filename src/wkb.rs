@@ -39,7 +39,20 @@ fn type_code(bytes: &[u8]) -> Option<u32> {
 
 /// Reads a geometry without curves, with the `wkb` crate.
 fn straight(bytes: &[u8]) -> Result<MultiPolygon<f64>, String> {
-    let geometry = Wkb::try_new(bytes).map_err(|e| format!("invalid WKB: {e}"))?;
+    let geometry = Wkb::try_new(bytes).map_err(|e| {
+        let text = e.to_string();
+        // The crate measures against the part of the buffer left at the ring it reads, so its
+        // "buffer length is 4" misled about a buffer of 13 bytes whose ring count was 2³¹.
+        if text.contains("Invalid buffer length") {
+            format!(
+                "invalid WKB: its {} bytes end before the rings and points its counts declare \
+                 (cut short, or a count is wrong)",
+                bytes.len()
+            )
+        } else {
+            format!("invalid WKB: {text}")
+        }
+    })?;
     // The reader stops at the end of the first geometry; anything after it means the caller
     // passed the wrong length or several geometries.
     let used = geometry.buf().len();
@@ -193,6 +206,10 @@ mod tests {
             let err = to_multi_polygon(&bytes[..len]).unwrap_err();
             assert!(err.starts_with("invalid WKB"), "{len}: {err}");
         }
+        // A polygon claiming 2³¹ − 1 rings in 13 bytes: the crate's message gave a length of 4.
+        let huge = [1, 3, 0, 0, 0, 0xff, 0xff, 0xff, 0x7f, 0xff, 0xff, 0xff, 0x7f];
+        let err = to_multi_polygon(&huge).unwrap_err();
+        assert!(err.contains("its 13 bytes end before"), "{err}");
         let mut longer = bytes.clone();
         longer.push(0);
         let err = to_multi_polygon(&longer).unwrap_err();
