@@ -207,7 +207,9 @@ mod tests {
             assert!(err.starts_with("invalid WKB"), "{len}: {err}");
         }
         // A polygon claiming 2³¹ − 1 rings in 13 bytes: the crate's message gave a length of 4.
-        let huge = [1, 3, 0, 0, 0, 0xff, 0xff, 0xff, 0x7f, 0xff, 0xff, 0xff, 0x7f];
+        let huge = [
+            1, 3, 0, 0, 0, 0xff, 0xff, 0xff, 0x7f, 0xff, 0xff, 0xff, 0x7f,
+        ];
         let err = to_multi_polygon(&huge).unwrap_err();
         assert!(err.contains("its 13 bytes end before"), "{err}");
         let mut longer = bytes.clone();
