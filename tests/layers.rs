@@ -349,6 +349,40 @@ fn us_counties_gives_a_complete_map() {
     let map = run(&regions, &params);
     assert_valid_grid(&regions, &map);
     assert_eq!(map.adjacency.len(), 8707);
+    // Washington's island counties, San Juan (53055, no rook neighbour: the data README) and
+    // Island (53029), lie beside a Washington county's cell. Sent to their places under the fit
+    // of the whole map, they sat in the layout's corner 15 cells from any (island_limit 1000, as
+    // before `landmass::Anchors`): the crowded east bends the map far from that fit.
+    let gap_to_washington = |map: &GridMap, island: &str| {
+        let cell = |id: &str| {
+            let c = map
+                .cells
+                .iter()
+                .find(|c| c.id == id)
+                .expect("the county's cell");
+            (c.col, c.row)
+        };
+        let (col, row) = cell(island);
+        (regions.iter())
+            .filter(|r| r.id.starts_with("53") && !["53055", "53029"].contains(&r.id.as_str()))
+            .map(|r| {
+                let (c, w) = cell(&r.id);
+                (c - col).abs().max((w - row).abs())
+            })
+            .min()
+            .expect("Washington's mainland counties")
+    };
+    let apart = run(
+        &regions,
+        &Params {
+            island_limit: 1000.0,
+            ..params
+        },
+    );
+    for island in ["53055", "53029"] {
+        assert_eq!(gap_to_washington(&map, island), 1, "{island}");
+        assert!(gap_to_washington(&apart, island) > 5, "{island}");
+    }
 }
 
 #[test]

@@ -242,13 +242,20 @@ fn generate_here(
         ));
     }
     let tracker = Tracker::new(progress, layout_work, prepared_share);
+    let reference = metrics::Reference::new(&prepared, frame);
+    let anchors = landmass::Anchors::new(
+        &prepared.area_centroids,
+        |i| reference.landmasses.large(i),
+        params.island_limit,
+    );
     let context = Context {
         blocks,
         grouped,
         pins,
         prepared: &prepared,
         frame,
-        reference: metrics::Reference::new(&prepared, frame),
+        reference,
+        anchors,
         params,
     };
     let run_count = levels.len();
@@ -1220,6 +1227,8 @@ struct Context<'a> {
     /// landmass blocks and the refinement where a region would be nearer another landmass than
     /// its own, so that they answer as the metric does.
     reference: metrics::Reference,
+    /// Where an island goes when its coast's cells lie far from its fitted place.
+    anchors: landmass::Anchors,
     params: &'a Params,
 }
 
@@ -1392,6 +1401,7 @@ impl Context<'_> {
         let misplaced = |region: usize, p: Coord<f64>| home.misplaced(region, self.frame.to_map(p));
         let homes = landmass::Homes {
             places: area,
+            anchors: &self.anchors,
             adjacency: &self.prepared.neighbours,
             misplaced: home.any_counted().then_some(&misplaced),
         };
@@ -1522,7 +1532,14 @@ impl Context<'_> {
             .map(|&k| lattice.centre(lattice.cells[k].col, lattice.cells[k].row))
             .collect();
         let (scale, offset) = metrics::fit(&assigned, area);
-        let targets: Vec<Coord<f64>> = area.iter().map(|&c| (c - offset) / scale).collect();
+        let targets: Vec<Coord<f64>> = (0..area.len())
+            .map(|i| {
+                let centre_of = |j: usize| assigned[j];
+                (self.anchors)
+                    .target(i, area, centre_of, (scale, offset), lattice.cell_size)
+                    .0
+            })
+            .collect();
         let home = &self.reference.landmasses;
         let nearer_another = |landmass: usize, (col, row): (i32, i32)| {
             let place = lattice.centre(col, row) * scale + offset;

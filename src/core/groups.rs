@@ -113,7 +113,8 @@ const DOCK_REACH: i32 = 8;
 /// Snake moved the coast; its own state's block is the nearer reference. The block moves whole,
 /// to the nearest shift (within [`DOCK_REACH`] cells of that place) whose cells are free, touch
 /// no other group's cells with `gap`, and, for hexagons, share no edge with another landmass
-/// (see `landmass::keeps_landmasses_apart`); it stays if none is nearer than where it is.
+/// (see `landmass::keeps_landmasses_apart`); it stays if none is nearer than where it is and
+/// its cells there fit.
 /// `lattice.cells[i]` is region i's cell. A block holding a pinned cell (`anchored`) stays.
 pub fn dock(
     lattice: &mut Lattice,
@@ -195,7 +196,13 @@ pub fn dock(
             .flat_map(|dr| (-DOCK_REACH..=DOCK_REACH).map(move |dc| (aim.0 + dc, aim.1 + dr)))
             .collect();
         shifts.sort_by(|&a, &b| off(a).total_cmp(&off(b)).then((a.1, a.0).cmp(&(b.1, b.0))));
-        let stay = off((0, 0));
+        // Where it is, unless a cell there touches another group's across the gap (an island
+        // `landmass::settle` put beside its coast): then the nearest place that fits.
+        let stay = if fits((0, 0)) {
+            off((0, 0))
+        } else {
+            f64::INFINITY
+        };
         if let Some(&(dc, dr)) = shifts
             .iter()
             .take_while(|&&s| off(s) < stay)

@@ -454,11 +454,102 @@ const SHIFT_WORK: usize = 100_000;
 /// two or three do, and the cap only bounds the work.
 const SETTLE_ROUNDS: usize = 8;
 
+/// How many regions of the large landmasses place a region of a small one ([`Anchors`]).
+const ANCHORS: usize = 3;
+
+/// Per region on a landmass of one or two regions (method.md §8's wrong-landmass share counts
+/// only landmasses of 3 regions or more), the regions whose cells place it: the [`ANCHORS`]
+/// regions of large landmasses whose places lie nearest (ties by index); none for any other
+/// region, or when no landmass is large.
+///
+/// The §8 fit is a scale and a shift for the whole map; where the layout must bend the map (a
+/// crowded capital region spreading over a sparse coast), the coast's regions lie cells from
+/// their fitted places, held there by their neighbours. An island of one region is held by
+/// nothing: sent to its fitted place, it went there alone, out to sea (Cozumel 16 cells north
+/// of its coast among Mexico's 2,458 municipalities, a tract of Albuquerque's 195 above the
+/// whole layout). So an island whose fitted place lies more than `limit` cells
+/// (`island_limit`) from where its anchors' cells put it (its place as seen from theirs) goes
+/// where they put it, beside its coast as the source has it. One within the limit keeps its
+/// fitted place: on a map the fit describes well (world_countries, where no island is more
+/// than 4.3 cells from where its coast puts it), following the anchors at any distance only
+/// added their errors to the island's (location 1.40 → 1.61 cells).
+pub struct Anchors {
+    of: Vec<Vec<usize>>,
+    /// In cells.
+    limit: f64,
+}
+
+impl Anchors {
+    /// The anchors of the regions at `places`, `large(i)` telling whether region `i`'s landmass
+    /// holds 3 regions or more; `limit` in cells.
+    pub fn new(places: &[Coord<f64>], large: impl Fn(usize) -> bool, limit: f64) -> Anchors {
+        use rstar::{primitives::GeomWithData, RTree};
+        let on_large: Vec<GeomWithData<[f64; 2], usize>> = (0..places.len())
+            .filter(|&i| large(i))
+            .map(|i| GeomWithData::new([places[i].x, places[i].y], i))
+            .collect();
+        let tree = RTree::bulk_load(on_large);
+        let of = (0..places.len())
+            .map(|i| {
+                if large(i) || tree.size() == 0 {
+                    return Vec::new();
+                }
+                let squared = |j: usize| {
+                    let d = places[j] - places[i];
+                    d.x * d.x + d.y * d.y
+                };
+                // A few more than wanted, so that ties at the last distance go by index.
+                let mut nearest: Vec<usize> = (tree
+                    .nearest_neighbor_iter(&[places[i].x, places[i].y]))
+                .take(ANCHORS + 2)
+                .map(|found| found.data)
+                .collect();
+                nearest.sort_by(|&a, &b| squared(a).total_cmp(&squared(b)).then(a.cmp(&b)));
+                nearest.truncate(ANCHORS);
+                nearest
+            })
+            .collect();
+        Anchors { of, limit }
+    }
+
+    /// Where region `i` belongs in the lattice's frame (cells of `cell_size`), given the §8 fit
+    /// (`scale`, `offset`: a centre g lies at the place s·g + t), the regions' `places` and
+    /// each region's cell centre `centre_of(j)`: its place under the fit, or where its anchors'
+    /// cells put it (the mean over them), when that is beyond the limit. The flag tells which.
+    pub fn target(
+        &self,
+        i: usize,
+        places: &[Coord<f64>],
+        centre_of: impl Fn(usize) -> Coord<f64>,
+        (scale, offset): (f64, Coord<f64>),
+        cell_size: f64,
+    ) -> (Coord<f64>, bool) {
+        let fitted = (places[i] - offset) / scale;
+        let own = &self.of[i];
+        if own.is_empty() {
+            return (fitted, false);
+        }
+        let sum = (own.iter()).fold(Coord { x: 0.0, y: 0.0 }, |sum, &j| {
+            sum + centre_of(j) + (places[i] - places[j]) / scale
+        });
+        let anchored = sum / own.len() as f64;
+        let apart = fitted - anchored;
+        let limit = self.limit * cell_size;
+        if apart.x * apart.x + apart.y * apart.y > limit * limit {
+            (anchored, true)
+        } else {
+            (fitted, false)
+        }
+    }
+}
+
 /// What [`settle`] places the landmass blocks by.
 pub struct Homes<'a> {
     /// Per region, where §8 measures it from (its area centroid), in the lattice's frame before
     /// the fit; also the directions its adjacent pairs should keep.
     pub places: &'a [Coord<f64>],
+    /// Where an island goes when its coast's cells lie far from its fitted place.
+    pub anchors: &'a Anchors,
     /// Adjacent region pairs: a pair across two landmasses (a country on a continent and an
     /// island) pulls their blocks together.
     pub adjacency: &'a [(usize, usize)],
@@ -708,6 +799,17 @@ impl Block<'_> {
         let centre = |(col, row): Position| lattice.centre(col, row);
         let inside = |region: usize| lattice.cells[self.cells[region]].part == part;
         let places = self.homes.places;
+        // Where the block's regions belong under the present fit. An island placed by the cells
+        // of the regions nearest it ([`Anchors`]), which stay where they are whatever this block
+        // does, is measured from there; any other block from its places under the fit as the
+        // shift leaves it.
+        let (scale, offset, _) = board.all.fit();
+        let (targets, anchored): (Vec<Coord<f64>>, Vec<bool>) = (regions.iter())
+            .map(|&i| {
+                (self.homes.anchors).target(i, places, |j| centre(at(j)), (scale, offset), size)
+            })
+            .unzip();
+        let anchored = anchored.contains(&true);
         let cost = |(du, dv): Position| {
             let moved = |i: usize| {
                 let (col, row) = at(i);
@@ -715,6 +817,16 @@ impl Block<'_> {
             };
             let d = self.offset(lattice, (du, dv));
             let (scale, offset, residual) = board.all.shifted(board.own, d).fit();
+            let residual = if anchored {
+                (regions.iter().zip(&targets))
+                    .map(|(&i, &t)| {
+                        let e = centre(moved(i)) - t;
+                        dot(e, e)
+                    })
+                    .sum()
+            } else {
+                residual
+            };
             let wrong = self.homes.misplaced.map_or(0, |misplaced| {
                 (regions.iter())
                     .filter(|&&i| misplaced(i, centre(moved(i)) * scale + offset))
@@ -727,19 +839,18 @@ impl Block<'_> {
                 .sum();
             (wrong, self.w_location * residual / (size * size) + pairs)
         };
-        // Where the block's regions lie from their cells under the present fit, in cells (rows
-        // downwards). The fit follows the block part of the way, so the search reaches twice as
-        // far, and a cell beyond.
-        let (scale, offset, _) = board.all.fit();
+        // Where the block's regions lie from their cells, in cells (rows downwards). The fit
+        // follows the block part of the way, so the search reaches twice as far, and a cell
+        // beyond.
         let n = regions.len() as f64;
-        let mean = regions.iter().fold(Coord { x: 0.0, y: 0.0 }, |d, &i| {
-            let target = (places[i] - offset) / scale;
-            let from = centre(at(i));
-            Coord {
-                x: d.x + (target.x - from.x) / (size * n),
-                y: d.y + (target.y - from.y) / (size * n),
-            }
-        });
+        let mean =
+            (regions.iter().zip(&targets)).fold(Coord { x: 0.0, y: 0.0 }, |d, (&i, &target)| {
+                let from = centre(at(i));
+                Coord {
+                    x: d.x + (target.x - from.x) / (size * n),
+                    y: d.y + (target.y - from.y) / (size * n),
+                }
+            });
         let ideal = lattice.tiling.fractional(mean);
         let span = |ideal: f64| {
             let reach = (2.0 * ideal).round() as i32;
@@ -1035,11 +1146,66 @@ mod tests {
         places[cells.len() - 1] = lattice.centre(place.0, place.1);
         let homes = Homes {
             places: &places,
+            anchors: &Anchors::new(&places, |_| false, 5.0),
             adjacency,
             misplaced,
         };
         settle(&mut lattice, &cells, &homes, &Params::default(), &[]);
         lattice
+    }
+
+    #[test]
+    fn an_island_far_from_its_fitted_place_goes_beside_its_coast() {
+        // A 12 × 12 mainland whose east column's regions lie 60 cells east of their cells (the
+        // layout bent the map there, the fit follows the other 132), and an island one cell
+        // east of that coast's row 5.
+        let side = 12;
+        let (lattice, cells, mut places) = mainland_and_island(side, (20, 5));
+        let island = cells.len() - 1;
+        for place in places.iter_mut().skip(11).step_by(12).take(12) {
+            place.x += 60.0;
+        }
+        places[island] = lattice.centre(72, 5);
+        let settled_with = |limit: f64| {
+            let mut lattice = lattice.clone();
+            let homes = Homes {
+                places: &places,
+                anchors: &Anchors::new(&places, |i| i != island, limit),
+                adjacency: &[],
+                misplaced: None,
+            };
+            settle(&mut lattice, &cells, &homes, &Params::default(), &[]);
+            island_at(&lattice)
+        };
+        // Its anchors are the coast's rows 5, 4 and 6 (nearest first, the tie by index); each
+        // puts it one cell (over the fit's scale) east of its own cell, on row 5: beside the
+        // coast.
+        assert_eq!(settled_with(5.0), (12, 5));
+        // Sent to its place under the fit instead, it lands out at sea, far from the coast.
+        let (col, _) = settled_with(1000.0);
+        assert!(col > 12 + 5, "{col}");
+    }
+
+    #[test]
+    fn anchors_are_the_nearest_regions_of_large_landmasses() {
+        let at = |x: f64, y: f64| Coord { x, y };
+        // Regions 0-3 on a large landmass, 4 and 5 on islands.
+        let places = [
+            at(0.0, 0.0),
+            at(1.0, 0.0),
+            at(2.0, 0.0),
+            at(3.0, 0.0),
+            at(2.5, 1.0),
+            at(9.0, 9.0),
+        ];
+        let anchors = Anchors::new(&places, |i| i < 4, 5.0);
+        assert!((0..4).all(|i| anchors.of[i].is_empty()));
+        // Region 4: 2 and 3 at √1.25, then 1 at √3.25; never the other island.
+        assert_eq!(anchors.of[4], vec![2, 3, 1]);
+        assert_eq!(anchors.of[5], vec![3, 2, 1]);
+        // No large landmass: nothing places an island.
+        let none = Anchors::new(&places, |_| false, 5.0);
+        assert!(none.of.iter().all(Vec::is_empty));
     }
 
     #[test]

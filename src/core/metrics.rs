@@ -117,6 +117,8 @@ pub struct Landmasses {
     of: Vec<usize>,
     /// Per part, whether it holds enough regions to count (3+), when two parts or more do.
     counted: Vec<bool>,
+    /// Per part, whether it holds 3 regions or more.
+    large: Vec<bool>,
 }
 
 impl Landmasses {
@@ -126,11 +128,9 @@ impl Landmasses {
         for &k in &of {
             sizes[k] += 1;
         }
-        let big = sizes.iter().filter(|&&n| n >= LANDMASS_REGIONS).count();
-        let counted: Vec<bool> = sizes
-            .iter()
-            .map(|&n| big >= 2 && n >= LANDMASS_REGIONS)
-            .collect();
+        let large: Vec<bool> = sizes.iter().map(|&n| n >= LANDMASS_REGIONS).collect();
+        let big = large.iter().filter(|&&large| large).count();
+        let counted: Vec<bool> = large.iter().map(|&large| big >= 2 && large).collect();
         let boxes = super::outline::box_tree(
             (parts.0.iter().zip(&counted)).map(|(p, &counts)| p.bounding_rect().filter(|_| counts)),
         );
@@ -147,7 +147,14 @@ impl Landmasses {
             boxes,
             of,
             counted,
+            large,
         }
+    }
+
+    /// Whether region `region`'s landmass holds 3 regions or more (whether or not another one
+    /// does).
+    pub fn large(&self, region: usize) -> bool {
+        (self.of.get(region)).is_some_and(|&k| self.large.get(k) == Some(&true))
     }
 
     /// Whether any region counts for the wrong-landmass share (two landmasses of 3+ regions).
