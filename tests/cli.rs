@@ -328,6 +328,51 @@ fn of_several_layers_the_first_is_laid_out_and_the_others_are_named() {
 }
 
 #[test]
+fn a_polygon_that_crosses_itself_only_once_projected_is_said_to_be_valid_as_drawn() {
+    let scratch = Scratch::new("projected-repair");
+    let src = scratch.path("lonlat.gpkg");
+    // A "C" whose east side is one edge along the meridian 170°E from 60°S to 60°N, and whose
+    // notch reaches 169.5°E at the equator, half a degree inside it. Equal Earth bows a meridian
+    // outwards towards the equator (x at 170°E is about 1.3 times larger on the equator than at
+    // 60°) while the edge stays a straight chord between its projected ends, so the notch's tip
+    // lands beyond it: valid in lon/lat, crossing itself once projected.
+    let c = "POLYGON((170 -60,170 60,100 60,100 1,169.5 0,100 -1,100 -60,170 -60))";
+    // A bow-tie, invalid as drawn, beside it.
+    let bow = "POLYGON((0 0,10 10,10 0,0 10,0 0))";
+    write_regions(
+        &src,
+        4326,
+        &[("c".into(), c.into()), ("bow".into(), bow.into())],
+    );
+    let dst = scratch.path("grid.gpkg");
+    let output = snakegrid(["-id", "code", "-t_srs", "EPSG:8857", p(&dst), p(&src)]);
+    assert_success(&output);
+    let summary = stdout(&output);
+    assert!(
+        summary.contains("note: feature c: invalid polygon repaired")
+            && summary.contains("note: feature bow: invalid polygon repaired"),
+        "{summary}"
+    );
+    assert!(
+        summary.contains("note: feature c is valid as drawn in the source's CRS")
+            && !summary.contains("bow is valid"),
+        "{summary}"
+    );
+    // Laid out where it is drawn (no projection), the bow-tie is repaired and said to be
+    // invalid as drawn, with no such note.
+    let planar = scratch.path("planar.gpkg");
+    write_regions(&planar, 8857, &[("bow".into(), bow.into())]);
+    let output = snakegrid(["-id", "code", p(&scratch.path("grid2.gpkg")), p(&planar)]);
+    assert_success(&output);
+    let summary = stdout(&output);
+    assert!(
+        summary.contains("feature bow: invalid polygon repaired")
+            && !summary.contains("valid as drawn"),
+        "{summary}"
+    );
+}
+
+#[test]
 fn a_mercator_source_is_laid_out_as_drawn_with_a_note() {
     let scratch = Scratch::new("mercator");
     let src = scratch.input("us_states");

@@ -284,6 +284,11 @@ fn run_in(
 
     let mut all_notes: Vec<String> = source_notes;
     all_notes.extend(map.notes.iter().cloned());
+    all_notes.extend(repaired_once_projected(
+        &map,
+        &features,
+        plan.transform.is_some(),
+    ));
     all_notes.append(&mut notes);
     all_notes.extend(fields.notes);
     for note in grid_notes {
@@ -612,6 +617,39 @@ impl<'l> Source<'l> {
             notes,
         })
     }
+}
+
+/// The regions whose polygons the core repaired but which are valid as drawn in the source's
+/// CRS (GEOS's validity, asked of the source features as read): projecting moves every vertex
+/// and keeps every edge straight, so a ring that passes close by itself can cross itself once
+/// projected (Natural Earth's Sudan and Mozambique in Equal Earth). The repair notes give the
+/// crossings in the working CRS and read as if the source were at fault; this says it is not.
+/// `None` when the layer was not projected or no such region was repaired.
+fn repaired_once_projected(map: &GridMap, features: &[Feature], projected: bool) -> Option<String> {
+    if !projected {
+        return None;
+    }
+    let valid_as_drawn: Vec<&str> = (map.cells.iter().zip(features))
+        .filter(|(cell, feature)| {
+            cell.repair.is_some() && feature.geometry().is_some_and(|g| g.is_valid())
+        })
+        .map(|(cell, _)| cell.id.as_str())
+        .collect();
+    let (first, count) = (valid_as_drawn.first()?, valid_as_drawn.len());
+    let named = match count {
+        1 => format!("feature {first} is"),
+        2..=10 => format!("features {} are", valid_as_drawn.join(", ")),
+        _ => format!(
+            "features {} and {} more are",
+            valid_as_drawn[..10].join(", "),
+            count - 10
+        ),
+    };
+    Some(format!(
+        "{named} valid as drawn in the source's CRS: a ring crosses itself only once projected \
+         to the working CRS (edges that pass close by each other), so the repair, and the \
+         crossing its note gives, are in the working CRS; there is nothing to fix in the source"
+    ))
 }
 
 /// Writes `text` as the output `what` in its staging folder.
