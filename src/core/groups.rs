@@ -114,7 +114,8 @@ const DOCK_REACH: i32 = 8;
 /// to the nearest shift (within [`DOCK_REACH`] cells of that place) whose cells are free, touch
 /// no other group's cells with `gap`, and, for hexagons, share no edge with another landmass
 /// (see `landmass::keeps_landmasses_apart`); it stays if none is nearer than where it is and
-/// its cells there fit.
+/// its cells there fit. A group's largest block alone on its landmass moves only where its
+/// cells break the gap beside a larger block, to the nearest place that keeps it.
 /// `lattice.cells[i]` is region i's cell. A block holding a pinned cell (`anchored`) stays.
 pub fn dock(
     lattice: &mut Lattice,
@@ -147,24 +148,10 @@ pub fn dock(
     let tiling = lattice.tiling;
     let apart = super::landmass::keeps_landmasses_apart(tiling);
     for b in (0..count).filter(|b| !anchored.contains(b)) {
-        let Some(main) = largest[blocks.group[b]].filter(|&l| l != b) else {
-            continue;
-        };
-        if on_landmass[blocks.landmass[b]] != 1 || blocks.landmass[main] == blocks.landmass[b] {
+        // Only a block alone on its landmass moves: it takes its landmass along whole.
+        if on_landmass[blocks.landmass[b]] != 1 {
             continue;
         }
-        let mean_of = |f: &dyn Fn(usize) -> Coord<f64>, block: usize| {
-            mean(members[block].iter().map(|&i| f(i)))
-        };
-        let here = mean_of(&|i| centre(i, lattice), b);
-        let wanted = mean_of(&|i| centre(i, lattice), main)
-            + (mean_of(&|i| places[i], b) - mean_of(&|i| places[i], main)) / scale;
-        let first = (
-            lattice.cells[members[b][0]].col,
-            lattice.cells[members[b][0]].row,
-        );
-        let aim = lattice.position_of(lattice.centre(first.0, first.1) + (wanted - here));
-        let aim = (aim.0 - first.0, aim.1 - first.1);
         let owner: FxHashMap<Position, usize> = (lattice.cells.iter().enumerate())
             .filter(|&(i, _)| blocks.of[i] != b)
             .map(|(i, c)| ((c.col, c.row), i))
@@ -186,6 +173,45 @@ pub fn dock(
                         .any(|n| clash(n, tiling.sharing_an_edge(p, n)))
             })
         };
+        // Whether a block of another group touches block `b` and is larger (or as large and
+        // earlier).
+        let gives_way = |b: usize| {
+            (members[b].iter()).any(|&i| {
+                let c = lattice.cells[i];
+                tiling.touching_positions((c.col, c.row)).any(|n| {
+                    owner.get(&n).is_some_and(|&j| {
+                        let other = blocks.of[j];
+                        blocks.group[other] != blocks.group[b]
+                            && (members[other].len(), std::cmp::Reverse(other))
+                                > (members[b].len(), std::cmp::Reverse(b))
+                    })
+                })
+            })
+        };
+        let mean_of = |f: &dyn Fn(usize) -> Coord<f64>, block: usize| {
+            mean(members[block].iter().map(|&i| f(i)))
+        };
+        let here = mean_of(&|i| centre(i, lattice), b);
+        let main = largest[blocks.group[b]].filter(|&l| l != b);
+        let wanted = match main {
+            Some(main) => {
+                mean_of(&|i| centre(i, lattice), main)
+                    + (mean_of(&|i| places[i], b) - mean_of(&|i| places[i], main)) / scale
+            }
+            // A group's largest block alone on its landmass (an island province beside the
+            // mainland) stays, unless its cells touch a larger block of another group across
+            // the gap (`landmass::settle` places landmasses knowing nothing of groups): then
+            // it goes to the nearest place that keeps the gap. Of two alike, the later gives
+            // way.
+            None if gap && gives_way(b) => here,
+            None => continue,
+        };
+        let first = (
+            lattice.cells[members[b][0]].col,
+            lattice.cells[members[b][0]].row,
+        );
+        let aim = lattice.position_of(lattice.centre(first.0, first.1) + (wanted - here));
+        let aim = (aim.0 - first.0, aim.1 - first.1);
         let off = |shift: Position| {
             let p = lattice.centre(first.0 + shift.0, first.1 + shift.1);
             let q = lattice.centre(first.0, first.1);
@@ -1013,6 +1039,46 @@ mod tests {
 
     fn squared(a: Coord<f64>, b: Coord<f64>) -> f64 {
         (a.x - b.x).powi(2) + (a.y - b.y).powi(2)
+    }
+
+    #[test]
+    fn an_island_group_touching_another_across_the_gap_is_docked_clear_of_it() {
+        // Group 0: four regions on landmass 0 at (0..2, 0..2); group 1: one region alone on
+        // landmass 1 at (2, 2), touching (1, 1) at a corner, as `landmass::settle` may leave
+        // it (it knows nothing of groups).
+        let at = [(0, 0), (1, 0), (0, 1), (1, 1), (2, 2)];
+        let mut lattice = Lattice {
+            tiling: Tiling::Square,
+            cell_size: 1.0,
+            origin: Coord { x: 0.0, y: 0.0 },
+            cells: (at.iter())
+                .enumerate()
+                .map(|(i, &(col, row))| LatticeCell {
+                    col,
+                    row,
+                    score: 2.0,
+                    part: usize::from(i == 4),
+                })
+                .collect(),
+        };
+        let places: Vec<Coord<f64>> = at.iter().map(|&(c, r)| lattice.centre(c, r)).collect();
+        let blocks = Blocks::new(
+            &[0, 0, 0, 0, 1],
+            &[Some(0), Some(0), Some(0), Some(0), Some(1)],
+        );
+        let island = |lattice: &Lattice| (lattice.cells[4].col, lattice.cells[4].row);
+        // Without a gap the contact is allowed: it stays.
+        let mut packed = lattice.clone();
+        dock(&mut packed, &blocks, &places, false, &[]);
+        assert_eq!(island(&packed), (2, 2));
+        // With a gap it moves one cell, to where it touches nothing of group 0.
+        dock(&mut lattice, &blocks, &places, true, &[]);
+        let (col, row) = island(&lattice);
+        assert_eq!((col - 2).abs() + (row - 2).abs(), 1, "{col} {row}");
+        assert!((0..4).all(|i| {
+            let c = lattice.cells[i];
+            (c.col - col).abs().max((c.row - row).abs()) > 1
+        }));
     }
 
     #[test]
