@@ -175,7 +175,7 @@ pub fn dock(
         };
         // Whether a block of another group touches block `b` and is larger (or as large and
         // earlier).
-        let gives_way = |b: usize| {
+        let gives_way = || {
             (members[b].iter()).any(|&i| {
                 let c = lattice.cells[i];
                 tiling.touching_positions((c.col, c.row)).any(|n| {
@@ -203,7 +203,7 @@ pub fn dock(
             // the gap (`landmass::settle` places landmasses knowing nothing of groups): then
             // it goes to the nearest place that keeps the gap. Of two alike, the later gives
             // way.
-            None if gap && gives_way(b) => here,
+            None if gap && gives_way() => here,
             None => continue,
         };
         let first = (

@@ -107,7 +107,8 @@ pub struct Scored<'a> {
 /// holding most of its area), indexed for distance queries: what the wrong-landmass share
 /// measures, and what the refinement avoids.
 pub struct Landmasses {
-    /// Per part, its index if it counts (see `counted`): only those are measured from.
+    /// Per part, its index if it counts ([`Landmasses::part_counts`]): only those are measured
+    /// from.
     parts: Vec<Option<RingIndex>>,
     /// The counted parts' boxes, indexed: a place asks only the parts whose box comes nearer
     /// than its own landmass (a layer of 2,000 islands of three regions each asked every one
@@ -115,10 +116,10 @@ pub struct Landmasses {
     boxes: RTree<GeomWithData<Rectangle<[f64; 2]>, usize>>,
     /// Per region, its part.
     of: Vec<usize>,
-    /// Per part, whether it holds enough regions to count (3+), when two parts or more do.
-    counted: Vec<bool>,
     /// Per part, whether it holds 3 regions or more.
     large: Vec<bool>,
+    /// Whether two parts or more are large: only then do the large ones count.
+    several: bool,
 }
 
 impl Landmasses {
@@ -129,8 +130,8 @@ impl Landmasses {
             sizes[k] += 1;
         }
         let large: Vec<bool> = sizes.iter().map(|&n| n >= LANDMASS_REGIONS).collect();
-        let big = large.iter().filter(|&&large| large).count();
-        let counted: Vec<bool> = large.iter().map(|&large| big >= 2 && large).collect();
+        let several = large.iter().filter(|&&large| large).count() >= 2;
+        let counted: Vec<bool> = large.iter().map(|&large| several && large).collect();
         let boxes = super::outline::box_tree(
             (parts.0.iter().zip(&counted)).map(|(p, &counts)| p.bounding_rect().filter(|_| counts)),
         );
@@ -146,9 +147,14 @@ impl Landmasses {
             parts,
             boxes,
             of,
-            counted,
             large,
+            several,
         }
+    }
+
+    /// Whether part `k` counts: it holds 3 regions or more, and another part does too.
+    fn part_counts(&self, k: usize) -> bool {
+        self.several && self.large.get(k) == Some(&true)
     }
 
     /// Whether region `region`'s landmass holds 3 regions or more (whether or not another one
@@ -159,13 +165,13 @@ impl Landmasses {
 
     /// Whether any region counts for the wrong-landmass share (two landmasses of 3+ regions).
     pub fn any_counted(&self) -> bool {
-        self.counted.contains(&true)
+        self.several
     }
 
     /// Whether region `region` counts for the wrong-landmass share (its landmass holds 3+
     /// regions, and another one does too).
     pub fn counts(&self, region: usize) -> bool {
-        (self.of.get(region)).is_some_and(|&k| self.counted.get(k) == Some(&true))
+        (self.of.get(region)).is_some_and(|&k| self.part_counts(k))
     }
 
     /// Per region, its landmass (a part of the union): [`Landmasses::misplaced`] gives the
@@ -183,7 +189,7 @@ impl Landmasses {
     /// Whether `p` lies outside landmass `home` and nearer another counted landmass; false when
     /// `home` does not count.
     pub fn nearer_another(&self, home: usize, p: Coord<f64>) -> bool {
-        if self.counted.get(home) != Some(&true) {
+        if !self.part_counts(home) {
             return false;
         }
         let distance = self.distance(home, p);
